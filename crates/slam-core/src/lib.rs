@@ -1,0 +1,28 @@
+//! slam-core: an ORB-SLAM2-class sparse-indirect visual SLAM system for RGB-D and rectified
+//! stereo, with the two techniques of "Towards Noise Resilient SLAM" (MC-OR and AVC) as
+//! switches. It does no file I/O and never prints: the CLI hands it frames and takes back poses.
+//!
+//! Module map (after stella_vslam's split by role):
+//! - [`camera`], [`image`]: sensor model and the plain images handed in;
+//! - [`feature`]: ORB extraction (pyramid, FAST, distribution, orientation, BRIEF);
+//! - [`frame`]: a tracked frame (keypoints, descriptors, depth / stereo, cell grid);
+//! - [`geometry`]: SE3 / SO3 maps and the perturbation convention;
+//! - [`optimize`]: residuals, pose-only optimization, local bundle adjustment;
+//! - [`data`]: the map (keyframes, map points, covisibility) in arenas with typed ids;
+//! - [`matching`]: projection, stereo and fuse searches;
+//! - [`module`]: tracking, local mapping, relocalization;
+//! - [`system`]: the synchronous `System` tying them together.
+
+pub mod camera;
+pub mod data;
+pub mod feature;
+pub mod frame;
+pub mod geometry;
+pub mod image;
+pub mod matching;
+pub mod module;
+pub mod optimize;
+pub mod system;
+
+pub use camera::{Camera, Distortion, SensorKind};
+pub use image::{DepthImage, FrameInput, GrayImage};

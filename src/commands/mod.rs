@@ -1,0 +1,6 @@
+//! One module per subcommand: its clap arguments and its `run` function.
+
+pub mod eval;
+pub mod features;
+pub mod fetch;
+pub mod synth;

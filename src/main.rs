@@ -1,0 +1,46 @@
+//! `noisefree`: the command-line front of the workspace. It parses arguments, reads and writes
+//! files, shows progress and prints reports; all the work lives in the library crates
+//! (`slam-core`, `ate-eval`, `datasets`, `synth`).
+
+mod commands;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Noise-resilient RGB-D / stereo visual SLAM (ORB-SLAM2 class, with the MC-OR and AVC
+/// techniques of "Towards Noise Resilient SLAM") and the tools to evaluate it.
+#[derive(Parser, Debug)]
+#[command(name = "noisefree", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// ATE / RPE of an estimated trajectory against ground truth (like evo_ape / evaluate_ate.py).
+    Eval(commands::eval::EvalArgs),
+    /// Generate a synthetic RGB-D or stereo sequence (TUM or EuRoC layout) with exact ground truth.
+    Synth(commands::synth::SynthArgs),
+    /// Download and unpack catalogued sequences (datasets.toml) into the data directory.
+    Fetch(commands::fetch::FetchArgs),
+    /// Detect ORB features on an image and draw them into a PNG.
+    Features(commands::features::FeaturesArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Eval(a) => commands::eval::run(a),
+        Command::Synth(a) => commands::synth::run(a),
+        Command::Fetch(a) => commands::fetch::run(a),
+        Command::Features(a) => commands::features::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
