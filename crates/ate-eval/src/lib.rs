@@ -1,1 +1,26 @@
-//! placeholder
+//! ate-eval: trajectory evaluation as the SLAM community does it — absolute trajectory error
+//! (ATE) after timestamp association and Umeyama / Horn alignment, and relative pose error
+//! (RPE) — giving the same numbers as TUM's `evaluate_ate.py` and `evo_ape` on the same files.
+//!
+//! - [`trajectory`]: the [`Trajectory`] type (timestamps + SE3 poses) and frame conversions;
+//! - [`io`]: TUM, EuRoC ground-truth CSV and KITTI readers / writers with line-precise errors;
+//! - [`associate`]: nearest-timestamp association (TUM and evo conventions);
+//! - [`align`]: closed-form Umeyama alignment (SE3, Sim3);
+//! - [`ate`], [`rpe`]: the error statistics.
+
+pub mod align;
+pub mod associate;
+pub mod ate;
+pub mod error;
+pub mod io;
+pub mod rpe;
+pub mod stats;
+pub mod trajectory;
+
+pub use align::{umeyama, Alignment, AlignmentMode};
+pub use associate::{associate, AssociationMode};
+pub use ate::{evaluate_ate, AteOptions, AteResult};
+pub use error::Error;
+pub use rpe::{evaluate_rpe, RpeDelta, RpeResult};
+pub use stats::ErrorStats;
+pub use trajectory::Trajectory;

@@ -1,0 +1,69 @@
+//! Errors of trajectory reading and evaluation. Every error about a file names the file and,
+//! where it applies, the 1-based line, so that a user can fix the input at once.
+
+use std::path::PathBuf;
+
+/// What can go wrong while reading trajectories or evaluating them.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The file could not be opened or read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        source: std::io::Error,
+    },
+    /// A line of the file is malformed (wrong field count, not a number, NaN, bad rotation...).
+    #[error("{path}:{line}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with the line.
+        message: String,
+    },
+    /// Timestamps must strictly increase down the file.
+    #[error("{path}:{line}: timestamp {stamp} is not after the previous one ({previous}); trajectories must be sorted by time without duplicates")]
+    Unsorted {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number of the offending stamp.
+        line: usize,
+        /// The offending stamp (seconds).
+        stamp: f64,
+        /// The stamp before it (seconds).
+        previous: f64,
+    },
+    /// A file holds no pose at all.
+    #[error("{path}: no poses in the file")]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A KITTI pose file and its timestamps file disagree in length.
+    #[error("{path}: {times} timestamps for {poses} poses")]
+    LengthMismatch {
+        /// The timestamps file.
+        path: PathBuf,
+        /// Number of timestamps.
+        times: usize,
+        /// Number of poses.
+        poses: usize,
+    },
+    /// Too few associated pose pairs for an alignment / statistic to mean anything.
+    #[error("only {pairs} pose pairs associated (need at least {needed}); check the time offset, --max-diff, and that both files cover the same time span")]
+    TooFewPairs {
+        /// Number of associated pairs.
+        pairs: usize,
+        /// Minimum required.
+        needed: usize,
+    },
+    /// The alignment is undefined (e.g. all positions identical for a Sim3 fit).
+    #[error("alignment is degenerate: {0}")]
+    Degenerate(String),
+}
+
+/// Result alias of this crate.
+pub type Result<T> = std::result::Result<T, Error>;
