@@ -3,6 +3,12 @@
 //! (`slam-core`, `ate-eval`, `datasets`, `synth`).
 
 mod commands;
+mod config_file;
+mod figures;
+mod runner;
+mod select;
+mod sweep;
+mod tables;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -18,6 +24,12 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Run SLAM on a sequence (default: the embedded synthetic sequence) and report its ATE.
+    Run(commands::run::RunArgs),
+    /// Sweep sequences x configurations x parameter grids x n seeds in parallel (resumable, shardable).
+    Sweep(commands::sweep::SweepArgs),
+    /// Turn sweep records into the paper's tables (Markdown + CSV).
+    Table(commands::table::TableArgs),
     /// ATE / RPE of an estimated trajectory against ground truth (like evo_ape / evaluate_ate.py).
     Eval(commands::eval::EvalArgs),
     /// Generate a synthetic RGB-D or stereo sequence (TUM or EuRoC layout) with exact ground truth.
@@ -31,6 +43,9 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run(a) => commands::run::run(a),
+        Command::Sweep(a) => commands::sweep::run(a),
+        Command::Table(a) => commands::table::run(a),
         Command::Eval(a) => commands::eval::run(a),
         Command::Synth(a) => commands::synth::run(a),
         Command::Fetch(a) => commands::fetch::run(a),

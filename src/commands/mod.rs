@@ -3,4 +3,7 @@
 pub mod eval;
 pub mod features;
 pub mod fetch;
+pub mod run;
+pub mod sweep;
 pub mod synth;
+pub mod table;

@@ -1,1 +1,65 @@
-//! placeholder
+//! datasets: turns a dataset folder into the frames slam-core consumes, names the paper's
+//! sequences, and downloads them.
+//!
+//! - [`tum`]: TUM RGB-D reader (`rgb.txt` / `depth.txt` association, fr1/fr2/fr3 cameras);
+//! - [`euroc`]: EuRoC ASL stereo reader, rectified with [`rectify`] (Bouguet's method);
+//! - [`synthetic`]: in-memory sequences from the `synth` generator;
+//! - [`catalog`]: `datasets.toml` (Table III's 31 sequences with the paper's numbers, and the
+//!   synthetic presets), [`data_root`];
+//! - [`fetch`]: download with resume, atomic unpack, verification;
+//! - [`cameras`]: the TUM cameras and depth factors; [`decode`]: PNG decoding.
+//!
+//! Every sequence is decoded once into a [`Sequence`] whose images are `Arc`-shared, so the
+//! runs of a sweep share one copy read-only (see [`sequence`] for the memory it takes).
+
+pub mod cameras;
+pub mod catalog;
+pub mod decode;
+pub mod error;
+pub mod euroc;
+pub mod fetch;
+pub mod rectify;
+pub mod sequence;
+pub mod synthetic;
+pub mod tum;
+
+pub use cameras::CameraId;
+pub use catalog::{data_root, Ate, Catalog, Class, Entry, EntryFormat, PaperAte};
+pub use error::DatasetError;
+pub use euroc::{load_euroc, load_euroc_with, EurocOptions};
+pub use sequence::{Format, Sequence};
+pub use synthetic::from_synth;
+pub use tum::{load_tum, load_tum_with, TumOptions};
+
+use std::path::Path;
+
+/// Which layout a folder has, if any: EuRoC when it holds `mav0/` (or is `mav0`), TUM RGB-D
+/// when it holds `rgb.txt` or `associations.txt`.
+pub fn detect_format(dir: &Path) -> Option<Format> {
+    if dir.join("mav0").is_dir() || (dir.join("cam0").is_dir() && dir.join("cam1").is_dir()) {
+        Some(Format::EurocStereo)
+    } else if dir.join("rgb.txt").is_file() || dir.join("associations.txt").is_file() {
+        Some(Format::TumRgbd)
+    } else {
+        None
+    }
+}
+
+/// Loads any TUM RGB-D or EuRoC folder with default options, detecting its layout.
+pub fn load_path(dir: &Path) -> Result<Sequence, DatasetError> {
+    if !dir.is_dir() {
+        return Err(DatasetError::Missing {
+            path: dir.to_path_buf(),
+            what: "a TUM RGB-D or EuRoC sequence folder".into(),
+        });
+    }
+    match detect_format(dir) {
+        Some(Format::EurocStereo) => load_euroc(dir),
+        Some(Format::TumRgbd) => load_tum(dir, None),
+        None => Err(DatasetError::invalid(
+            dir,
+            "neither a TUM RGB-D folder (rgb.txt, depth.txt) nor an EuRoC folder (mav0/); \
+             for TUM the rgb.txt list is missing",
+        )),
+    }
+}

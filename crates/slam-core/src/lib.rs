@@ -11,6 +11,7 @@
 //! - [`data`]: the map (keyframes, map points, covisibility) in arenas with typed ids;
 //! - [`matching`]: projection, stereo and fuse searches;
 //! - [`module`]: tracking, local mapping, relocalization;
+//! - [`solve`]: triangulation, absolute orientation, pose RANSAC;
 //! - [`system`]: the synchronous `System` tying them together.
 
 pub mod camera;
@@ -22,7 +23,9 @@ pub mod image;
 pub mod matching;
 pub mod module;
 pub mod optimize;
+pub mod solve;
 pub mod system;
+pub mod techniques;
 
 pub use camera::{Camera, Distortion, SensorKind};
 pub use image::{DepthImage, FrameInput, GrayImage};

@@ -1,1 +1,621 @@
-//! (filled by its issue)
+//! The synchronous SLAM system: one call to [`System::track`] per frame runs feature extraction,
+//! tracking, the keyframe decision and, when a keyframe is inserted, local mapping to completion
+//! (the paper synchronises ORB-SLAM2's threads the same way). Every random choice draws from
+//! one ChaCha RNG seeded by `Config::seed`, and every container iterates in id order, so the
+//! same frames, configuration and seed give a bit-identical trajectory. In this synchronous mode
+//! the seed only reaches the relocalization RANSAC.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use nalgebra::Isometry3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::camera::Camera;
+use crate::data::{Features, KeyFrameId, Map, ScaleLevels, TrackedFrame};
+use crate::feature::{OrbConfig, OrbExtractor};
+use crate::frame::Frame;
+use crate::image::FrameInput;
+use crate::module::keyframe_decision::{need_new_keyframe, KeyFrameDecisionInput, KeyFrameParams};
+use crate::module::keyframe_insertion::create_keyframe;
+use crate::module::local_mapping::{LocalMapper, MappingContext, MappingParams, MappingReport};
+use crate::module::pose_estimation::{mcor_frame_gate, renormalized, NoiseHooks};
+use crate::module::relocalization::{relocalize, RelocalizationContext, RelocalizationParams};
+use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
+use crate::optimize::{BaConfig, PoseOptConfig};
+
+pub use crate::module::noise::{AvcParams, McorParams};
+
+/// serde mirror of [`OrbConfig`] (which does not derive serde itself).
+#[derive(Serialize, Deserialize)]
+#[serde(remote = "OrbConfig", default)]
+struct OrbConfigDef {
+    n_features: usize,
+    scale_factor: f64,
+    n_levels: usize,
+    ini_th_fast: u8,
+    min_th_fast: u8,
+}
+
+impl Default for OrbConfigDef {
+    fn default() -> Self {
+        let c = OrbConfig::default();
+        OrbConfigDef {
+            n_features: c.n_features,
+            scale_factor: c.scale_factor,
+            n_levels: c.n_levels,
+            ini_th_fast: c.ini_th_fast,
+            min_th_fast: c.min_th_fast,
+        }
+    }
+}
+
+/// Everything that configures a run. Defaults are ORB-SLAM2's TUM RGB-D settings with both of
+/// the paper's techniques off (the "ORB-SLAM2" column of Table III). Read from TOML by the CLI;
+/// missing fields take their defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Config {
+    /// ORB extractor (1000 features, 8 levels, scale 1.2, FAST 20 / 7).
+    #[serde(with = "OrbConfigDef")]
+    pub orb: OrbConfig,
+    /// Seed of the run's single RNG (relocalization RANSAC).
+    pub seed: u64,
+    /// Tracking thresholds.
+    pub tracking: TrackingParams,
+    /// Keyframe decision.
+    pub keyframes: KeyFrameParams,
+    /// Local mapping.
+    pub mapping: MappingParams,
+    /// Relocalization.
+    pub relocalization: RelocalizationParams,
+    /// Keypoints the first frame needs to initialise the map (ORB-SLAM2: more than 500).
+    pub init_min_keypoints: usize,
+    /// Keypoints with depth the first frame needs (ours: 50; ORB-SLAM2 does not check, and
+    /// would initialise on a frame without depth).
+    pub init_min_depths: usize,
+    /// MC-OR (paper III-A) when set.
+    pub mcor: Option<McorParams>,
+    /// AVC (paper III-B) when set.
+    pub avc: Option<AvcParams>,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            orb: OrbConfig::default(),
+            seed: 0,
+            tracking: TrackingParams::default(),
+            keyframes: KeyFrameParams::default(),
+            mapping: MappingParams::default(),
+            relocalization: RelocalizationParams::default(),
+            init_min_keypoints: 500,
+            init_min_depths: 50,
+            mcor: None,
+            avc: None,
+        }
+    }
+}
+
+impl Config {
+    /// ORB-SLAM2's EuRoC stereo settings (1200 features), otherwise as the default.
+    pub fn stereo() -> Self {
+        Config {
+            orb: OrbConfig::stereo(),
+            ..Config::default()
+        }
+    }
+}
+
+/// Tracking state after a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TrackingState {
+    /// No map yet (first frames without enough features / depth).
+    NotInitialized,
+    /// Tracked.
+    Ok,
+    /// Not tracked; relocalization is tried on the next frames.
+    Lost,
+    /// Tracked again by relocalization on this frame.
+    Relocalized,
+}
+
+impl TrackingState {
+    /// Whether the frame has a pose.
+    pub fn is_tracked(self) -> bool {
+        matches!(self, TrackingState::Ok | TrackingState::Relocalized)
+    }
+}
+
+/// Per-frame statistics (one CSV row in the CLI's output).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameStats {
+    /// Capture time, seconds.
+    pub timestamp: f64,
+    /// State after the frame.
+    pub state: TrackingState,
+    /// Keypoints extracted.
+    pub n_keypoints: usize,
+    /// Matches entering the last pose optimization (local map).
+    pub n_matches: usize,
+    /// Of those, inliers at the final pose.
+    pub n_inliers: usize,
+    /// Of those, outliers at the final pose.
+    pub n_outliers: usize,
+    /// Inliers whose map point has observations (ORB-SLAM2's mnMatchesInliers).
+    pub n_tracked_map_points: usize,
+    /// MC-OR (paper Fig. 8): matches whose map-point cluster fails the cluster-level test at the
+    /// frame's final pose (0 when MC-OR is off).
+    pub n_mcor_rejected_clusters: usize,
+    /// MC-OR: matches whose own 3-D feature fails the feature-level test at the final pose.
+    pub n_mcor_rejected_features: usize,
+    /// A keyframe was inserted from this frame.
+    pub keyframe_inserted: bool,
+    /// Tracking was recovered by relocalization on this frame.
+    pub relocalized: bool,
+    /// Keyframes in the map after the frame.
+    pub n_keyframes: usize,
+    /// Map points in the map after the frame.
+    pub n_map_points: usize,
+    /// ORB extraction and frame construction, milliseconds.
+    pub time_features_ms: f64,
+    /// Tracking (motion model / reference / relocalization, local map, keyframe decision), ms.
+    pub time_tracking_ms: f64,
+    /// Local mapping without BA, milliseconds.
+    pub time_mapping_ms: f64,
+    /// Local bundle adjustment, milliseconds.
+    pub time_ba_ms: f64,
+}
+
+/// What [`System::track`] returns for one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrackResult {
+    /// Tracking state after the frame.
+    pub state: TrackingState,
+    /// Estimated pose world -> camera when tracked.
+    pub tcw: Option<Isometry3<f64>>,
+    /// Statistics of the frame.
+    pub stats: FrameStats,
+}
+
+/// A frame's trajectory entry: its pose relative to its reference keyframe (as ORB-SLAM2 stores
+/// it), so later keyframe corrections reach the output.
+#[derive(Clone, Copy, Debug)]
+struct FrameRecord {
+    timestamp: f64,
+    reference: Option<KeyFrameId>,
+    t_cr: Isometry3<f64>,
+    tracked: bool,
+}
+
+/// The SLAM system (RGB-D or rectified stereo, as `camera.sensor` says).
+#[derive(Debug)]
+pub struct System {
+    camera: Camera,
+    config: Config,
+    extractor: OrbExtractor,
+    levels: ScaleLevels,
+    pose_cfg: PoseOptConfig,
+    ba_cfg: BaConfig,
+    map: Map,
+    tracker: Tracker,
+    mapper: LocalMapper,
+    rng: ChaCha8Rng,
+    state: TrackingState,
+    frame_count: u64,
+    last_keyframe_frame: u64,
+    records: Vec<FrameRecord>,
+    stats: Vec<FrameStats>,
+}
+
+impl System {
+    /// A system with an empty map.
+    pub fn new(camera: Camera, config: Config) -> Self {
+        let extractor = OrbExtractor::new(config.orb.clone());
+        let si = extractor.scale_info();
+        let levels = ScaleLevels::new(si.n_levels, si.scale_factor);
+        System {
+            rng: ChaCha8Rng::seed_from_u64(config.seed),
+            camera,
+            config,
+            extractor,
+            levels,
+            pose_cfg: PoseOptConfig::default(),
+            ba_cfg: BaConfig::default(),
+            map: Map::new(),
+            tracker: Tracker::default(),
+            mapper: LocalMapper::default(),
+            state: TrackingState::NotInitialized,
+            frame_count: 0,
+            last_keyframe_frame: 0,
+            records: Vec::new(),
+            stats: Vec::new(),
+        }
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The map (read only).
+    pub fn map(&self) -> &Map {
+        &self.map
+    }
+
+    /// The last frame processed, with its pose and matches (for analyses and tests).
+    pub fn last_frame(&self) -> Option<&TrackedFrame> {
+        self.tracker.last_frame.as_ref()
+    }
+
+    /// Tracking state after the last frame.
+    pub fn state(&self) -> TrackingState {
+        self.state
+    }
+
+    /// Statistics of every frame so far.
+    pub fn frame_stats(&self) -> &[FrameStats] {
+        &self.stats
+    }
+
+    /// Keyframes in the map.
+    pub fn keyframe_count(&self) -> usize {
+        self.map.keyframe_count()
+    }
+
+    /// Map points in the map.
+    pub fn map_point_count(&self) -> usize {
+        self.map.map_point_count()
+    }
+
+    /// Pose `T_world_camera` of every tracked frame, recomputed from its reference keyframe's
+    /// current pose (ORB-SLAM2's SaveTrajectoryTUM; lost and uninitialised frames skipped).
+    pub fn trajectory(&self) -> Vec<(f64, Isometry3<f64>)> {
+        self.records
+            .iter()
+            .filter(|r| r.tracked)
+            .filter_map(|r| {
+                let trw = self.map.keyframe_pose_any(r.reference?)?;
+                Some((r.timestamp, (r.t_cr * trw).inverse()))
+            })
+            .collect()
+    }
+
+    /// Keyframe poses `T_world_camera` with their timestamps, in id order.
+    pub fn keyframe_trajectory(&self) -> Vec<(f64, Isometry3<f64>)> {
+        self.map
+            .keyframes()
+            .map(|k| (k.timestamp, k.tcw.inverse()))
+            .collect()
+    }
+
+    /// Processes one frame.
+    pub fn track(&mut self, input: &FrameInput) -> TrackResult {
+        let id = self.frame_count;
+        self.frame_count += 1;
+        let t0 = Instant::now();
+        let frame = Frame::new(id, input, &self.camera, &mut self.extractor);
+        let features = Arc::new(Features::new(
+            frame.keypoints,
+            frame.descriptors,
+            frame.depth,
+            frame.u_right,
+            &self.camera,
+        ));
+        let mut cur = TrackedFrame::new(id, input.timestamp, features);
+        let time_features_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let mut stats = FrameStats {
+            timestamp: input.timestamp,
+            state: self.state,
+            n_keypoints: cur.len(),
+            n_matches: 0,
+            n_inliers: 0,
+            n_outliers: 0,
+            n_tracked_map_points: 0,
+            n_mcor_rejected_clusters: 0,
+            n_mcor_rejected_features: 0,
+            keyframe_inserted: false,
+            relocalized: false,
+            n_keyframes: 0,
+            n_map_points: 0,
+            time_features_ms,
+            time_tracking_ms: 0.0,
+            time_mapping_ms: 0.0,
+            time_ba_ms: 0.0,
+        };
+        let mut mapping = MappingReport::default();
+        if self.state == TrackingState::NotInitialized {
+            if let Some(report) = self.initialize(&mut cur) {
+                mapping = report;
+                self.state = TrackingState::Ok;
+                stats.keyframe_inserted = true;
+                stats.n_matches = cur.n_matches();
+                stats.n_inliers = stats.n_matches;
+                stats.n_tracked_map_points = stats.n_matches;
+            }
+        } else {
+            self.track_frame(&mut cur, &mut stats, &mut mapping);
+        }
+        self.record(&cur);
+        let tcw = if self.state.is_tracked() {
+            cur.tcw
+        } else {
+            None
+        };
+        self.tracker.last_frame = Some(cur);
+        stats.state = self.state;
+        stats.n_keyframes = self.map.keyframe_count();
+        stats.n_map_points = self.map.map_point_count();
+        stats.time_mapping_ms = mapping.time_mapping_ms;
+        stats.time_ba_ms = mapping.time_ba_ms;
+        stats.time_tracking_ms =
+            (t1.elapsed().as_secs_f64() * 1e3 - mapping.time_mapping_ms - mapping.time_ba_ms)
+                .max(0.0);
+        self.stats.push(stats.clone());
+        TrackResult {
+            state: self.state,
+            tcw,
+            stats,
+        }
+    }
+
+    /// Map initialisation from one frame (ORB-SLAM2's StereoInitialization): identity pose, a
+    /// map point for every keypoint with depth.
+    fn initialize(&mut self, cur: &mut TrackedFrame) -> Option<MappingReport> {
+        let n_depth = (0..cur.len())
+            .filter(|&i| cur.features.depth_of(i).is_some())
+            .count();
+        if cur.len() <= self.config.init_min_keypoints || n_depth < self.config.init_min_depths {
+            return None;
+        }
+        cur.tcw = Some(Isometry3::identity());
+        let kf = self.map.create_keyframe(
+            cur.id,
+            cur.timestamp,
+            Isometry3::identity(),
+            cur.features.clone(),
+        );
+        let mut created = Vec::new();
+        for i in 0..cur.len() {
+            let Some(pc) = cur.features.unproject_camera(i, &self.camera) else {
+                continue;
+            };
+            let mp = self
+                .map
+                .create_map_point(pc, cur.features.descriptors[i], kf);
+            self.map.add_observation(mp, kf, i);
+            self.map.compute_distinctive_descriptor(mp);
+            self.map.update_normal_and_depth(mp, &self.levels);
+            cur.map_points[i] = Some(mp);
+            created.push(mp);
+        }
+        cur.reference_kf = Some(kf);
+        self.tracker.reference_kf = Some(kf);
+        self.tracker.local_keyframes = vec![kf];
+        self.tracker.local_points = created.clone();
+        self.last_keyframe_frame = cur.id;
+        let ctx = MappingContext {
+            camera: &self.camera,
+            levels: &self.levels,
+            params: &self.config.mapping,
+            ba: &self.ba_cfg,
+            hooks: NoiseHooks {
+                mcor: self.config.mcor.as_ref(),
+                avc: self.config.avc.as_ref(),
+            },
+        };
+        Some(self.mapper.process(kf, created, &mut self.map, &ctx))
+    }
+
+    /// Tracking of an initialised system (ORB-SLAM2's Track after initialisation).
+    fn track_frame(
+        &mut self,
+        cur: &mut TrackedFrame,
+        stats: &mut FrameStats,
+        mapping: &mut MappingReport,
+    ) {
+        let max_frames = self
+            .config
+            .keyframes
+            .max_frames
+            .unwrap_or(self.camera.fps.round().max(1.0) as u64);
+        let hooks = NoiseHooks {
+            mcor: self.config.mcor.as_ref(),
+            avc: self.config.avc.as_ref(),
+        };
+        let ctx = TrackingContext {
+            camera: &self.camera,
+            levels: &self.levels,
+            params: &self.config.tracking,
+            pose_cfg: &self.pose_cfg,
+            hooks,
+            max_frames,
+        };
+        let mut relocalized = false;
+        let mut ok = if self.state.is_tracked() {
+            self.tracker.check_replaced_in_last_frame(&self.map);
+            let last_rel = self
+                .records
+                .last()
+                .filter(|r| r.tracked)
+                .and_then(|r| r.reference.map(|k| (k, r.t_cr)));
+            self.tracker.update_last_frame(&self.map, last_rel);
+            if self.tracker.velocity.is_none() || self.tracker.recently_relocalized(cur.id, 2) {
+                self.tracker
+                    .track_reference_keyframe(cur, &mut self.map, &ctx)
+            } else {
+                self.tracker
+                    .track_with_motion_model(cur, &mut self.map, &ctx)
+                    || self
+                        .tracker
+                        .track_reference_keyframe(cur, &mut self.map, &ctx)
+            }
+        } else {
+            let rctx = RelocalizationContext {
+                camera: &self.camera,
+                levels: &self.levels,
+                params: &self.config.relocalization,
+                pose_cfg: &self.pose_cfg,
+                hooks,
+            };
+            match relocalize(cur, &self.map, &rctx, &mut self.rng) {
+                Some(kf) => {
+                    self.tracker.last_reloc_frame = Some(cur.id);
+                    self.tracker.reference_kf = Some(kf);
+                    relocalized = true;
+                    true
+                }
+                None => false,
+            }
+        };
+        cur.reference_kf = self.tracker.reference_kf;
+        if ok {
+            ok = self.tracker.track_local_map(cur, &mut self.map, &ctx);
+            stats.n_matches = self.tracker.local_matches;
+            stats.n_inliers = cur
+                .map_points
+                .iter()
+                .zip(&cur.outliers)
+                .filter(|(m, &o)| m.is_some() && !o)
+                .count();
+            stats.n_outliers = stats.n_matches.saturating_sub(stats.n_inliers);
+            stats.n_tracked_map_points = self.tracker.matches_inliers;
+            if let (Some(params), Some(tcw)) = (self.config.mcor.as_ref(), cur.tcw) {
+                // The gate the last optimization round ran, re-run at the final pose.
+                let (_, gate) = mcor_frame_gate(cur, &self.map, &self.camera, params, &tcw);
+                stats.n_mcor_rejected_clusters = gate.n_rejected_clusters;
+                stats.n_mcor_rejected_features = gate.n_rejected_features;
+            }
+        }
+        if !ok {
+            self.state = TrackingState::Lost;
+            self.tracker.velocity = None;
+            return;
+        }
+        self.state = if relocalized {
+            TrackingState::Relocalized
+        } else {
+            TrackingState::Ok
+        };
+        stats.relocalized = relocalized;
+        let last_pose = self.tracker.last_frame.as_ref().and_then(|l| l.tcw);
+        self.tracker.velocity = match (cur.tcw, last_pose) {
+            (Some(c), Some(l)) => Some(renormalized(&(c * l.inverse()))),
+            _ => None,
+        };
+        let decision = KeyFrameDecisionInput {
+            frame_id: cur.id,
+            last_keyframe_frame: self.last_keyframe_frame,
+            last_reloc_frame: self.tracker.last_reloc_frame,
+            matches_inliers: self.tracker.matches_inliers,
+            reference_kf: self.tracker.reference_kf.unwrap_or(KeyFrameId(0)),
+        };
+        if need_new_keyframe(
+            cur,
+            &decision,
+            &self.map,
+            &self.camera,
+            &self.config.keyframes,
+        ) {
+            if let Some((kf, created)) =
+                create_keyframe(cur, &mut self.map, &self.camera, &self.levels)
+            {
+                self.tracker.reference_kf = Some(kf);
+                cur.reference_kf = Some(kf);
+                self.last_keyframe_frame = cur.id;
+                stats.keyframe_inserted = true;
+                let mctx = MappingContext {
+                    camera: &self.camera,
+                    levels: &self.levels,
+                    params: &self.config.mapping,
+                    ba: &self.ba_cfg,
+                    hooks,
+                };
+                *mapping = self.mapper.process(kf, created, &mut self.map, &mctx);
+            }
+        }
+        for i in 0..cur.len() {
+            if cur.outliers[i] {
+                cur.map_points[i] = None;
+                cur.outliers[i] = false;
+            }
+        }
+    }
+
+    /// Stores the frame's pose relative to its reference keyframe (or repeats the last relative
+    /// pose, flagged untracked, as ORB-SLAM2 does for lost frames).
+    fn record(&mut self, cur: &TrackedFrame) {
+        let tracked = self.state.is_tracked();
+        let rec = match (tracked, cur.tcw, cur.reference_kf) {
+            (true, Some(tcw), Some(r)) => match self.map.keyframe_pose_any(r) {
+                Some(trw) => FrameRecord {
+                    timestamp: cur.timestamp,
+                    reference: Some(r),
+                    // A keyframe made from this frame may have been moved by local BA already;
+                    // the frame is that keyframe, so its relative pose is the identity.
+                    t_cr: if self
+                        .map
+                        .keyframe_any(r)
+                        .is_some_and(|k| k.frame_id == cur.id)
+                    {
+                        Isometry3::identity()
+                    } else {
+                        renormalized(&(tcw * trw.inverse()))
+                    },
+                    tracked: true,
+                },
+                None => self.untracked_record(cur.timestamp),
+            },
+            _ => self.untracked_record(cur.timestamp),
+        };
+        self.records.push(rec);
+    }
+
+    fn untracked_record(&self, timestamp: f64) -> FrameRecord {
+        match self.records.last() {
+            Some(last) => FrameRecord {
+                timestamp,
+                tracked: false,
+                ..*last
+            },
+            None => FrameRecord {
+                timestamp,
+                reference: None,
+                t_cr: Isometry3::identity(),
+                tracked: false,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn partial_toml_config_keeps_defaults_and_switches_techniques() {
+        let c: Config = toml::from_str(
+            "seed = 5\n[tracking]\nlocal_ratio = 0.7\n[orb]\nn_features = 1200\n[mcor]\ntau_mg = 0.3\n",
+        )
+        .unwrap();
+        assert_eq!(c.seed, 5);
+        assert_eq!(c.tracking.local_ratio, 0.7);
+        assert_eq!(c.tracking.min_inliers_local_map, 30);
+        assert_eq!(c.orb.n_features, 1200);
+        assert_eq!(c.orb.n_levels, 8);
+        let m = c.mcor.clone().unwrap();
+        assert_eq!((m.tau_mf, m.tau_gf, m.tau_mg), (0.7, 0.7, 0.3));
+        assert!(c.avc.is_none());
+        let back: Config = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
+        assert_eq!(back, c);
+        assert_eq!(toml::from_str::<Config>("").unwrap(), Config::default());
+    }
+}

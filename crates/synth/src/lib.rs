@@ -1,1 +1,76 @@
-//! placeholder
+//! synth: photo-like synthetic RGB-D and stereo sequences with exact ground truth and a
+//! controllable depth-sensor noise model (after Nguyen et al. 2012), for CI regression and as
+//! the embedded default sequence of `noisefree run`.
+//!
+//! Module map:
+//! - [`config`]: `SynthConfig`, each noise component its own switch, and the named presets;
+//! - [`scene`], [`texture`]: the textured room, its objects and walking "people";
+//! - [`trajectory`]: smooth `xyz`, `rpy` and `spin` camera paths;
+//! - [`render`]: the parallel ray-caster (depth, incidence, ids, anti-aliased colour);
+//! - [`noise`]: the depth-sensor model and image noise;
+//! - [`hash`]: counter-based per-pixel randomness (order- and thread-independent);
+//! - [`generator`]: random access to frames of a (config, seed) sequence;
+//! - [`tum`], [`euroc`]: writers of the TUM RGB-D and EuRoC ASL folder layouts;
+//! - [`contact`]: a contact-sheet picture (RGB | depth | depth noise) of a sequence.
+
+pub mod config;
+pub mod contact;
+pub mod euroc;
+pub mod generator;
+pub mod hash;
+pub mod noise;
+pub mod render;
+pub mod scene;
+pub mod texture;
+pub mod trajectory;
+pub mod tum;
+mod write;
+
+use std::path::PathBuf;
+
+pub use config::{
+    preset_names, AxialNoise, DepthLag, DepthNoise, DisparityQuantisation, Holes, ImageConfig,
+    LateralNoise, Misregistration, MovingObjects, Preset, Supersampling, SynthConfig,
+    SystematicDistortion, Trajectory,
+};
+pub use contact::{contact_sheet, write_contact_sheet};
+pub use euroc::write_euroc;
+pub use generator::{Generator, SynthFrame};
+pub use tum::write_tum;
+
+/// Everything that can go wrong in this crate; file errors name the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SynthError {
+    /// A preset or trajectory name that does not exist.
+    #[error("unknown {what} '{name}' (valid: {valid})")]
+    UnknownName {
+        /// What was looked up ("preset", "trajectory").
+        what: &'static str,
+        /// The name given.
+        name: String,
+        /// The valid names, comma-separated.
+        valid: String,
+    },
+    /// A configuration value out of its range.
+    #[error("invalid synthetic configuration: {0}")]
+    InvalidConfig(String),
+    /// Reading or writing a file or folder failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// Encoding a PNG failed.
+    #[error("{path}: {source}")]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: image::ImageError,
+    },
+    /// The output folder exists and is not empty.
+    #[error("{0}: output folder exists and is not empty (remove it or choose another)")]
+    OutputExists(PathBuf),
+}

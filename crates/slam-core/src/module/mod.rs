@@ -1,1 +1,13 @@
-//! (filled by its issue)
+//! The SLAM modules, one job each (after stella_vslam's `module/`): [`pose_estimation`] (pose-only
+//! optimization of a frame, with the MC-OR / AVC hook points), [`tracking`] (motion model,
+//! reference keyframe, local map), [`keyframe_decision`] and [`keyframe_insertion`] (when and how a
+//! frame becomes a keyframe), [`local_mapping`] (new points, fusion, culling, local BA) and
+//! [`relocalization`]. [`noise`] holds the parameters of the paper's two techniques.
+
+pub mod keyframe_decision;
+pub mod keyframe_insertion;
+pub mod local_mapping;
+pub mod noise;
+pub mod pose_estimation;
+pub mod relocalization;
+pub mod tracking;

@@ -1,1 +1,30 @@
-//! (filled by its issue)
+//! Nonlinear least squares for tracking and mapping: reprojection residuals as plain data,
+//! pose-only optimization with chi2 outlier rounds, and sparse local bundle adjustment, both
+//! driven by one Levenberg-Marquardt loop with g2o's damping schedule (what ORB-SLAM2 runs).
+//!
+//! Poses follow the convention of [`crate::geometry`]: `Tcw`, left perturbation
+//! `T <- exp(xi) * T`, `xi = [omega; upsilon]`. Residuals are functions of the point in camera
+//! coordinates ([`Measurement`]), so a new residual such as the paper's 4-D AVC term plugs in
+//! through [`CameraResidual`] without touching the solvers.
+
+mod lm;
+mod local_ba;
+#[cfg(test)]
+mod numdiff;
+mod pose_only;
+mod residual;
+mod robust;
+#[cfg(test)]
+mod test_scene;
+
+pub use local_ba::{
+    local_bundle_adjustment, BaConfig, BaKeyFrame, BaObservation, BaPoint, BaProblem, BaReport,
+};
+pub use pose_only::{
+    pose_optimization, pose_optimization_with, BetweenRounds, PoseObservation, PoseOptConfig,
+    PoseOptResult,
+};
+pub use residual::{
+    chi2_95, CameraResidual, Measurement, ResidualBlock, MAX_RESIDUAL_DOF, MIN_DEPTH,
+};
+pub use robust::Huber;

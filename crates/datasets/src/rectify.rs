@@ -1,0 +1,524 @@
+//! Stereo rectification after Bouguet (the method of OpenCV's `stereoRectify`): each camera is
+//! rotated by half of the relative rotation, then both by the rotation that brings the baseline
+//! onto the x axis; the two share new pinhole intrinsics chosen so that the rectified images
+//! hold only valid pixels (OpenCV's `alpha = 0`), with equal principal points (zero disparity at
+//! infinity). Remap maps (rectified pixel -> raw pixel, bilinear) are computed once per sequence.
+//!
+//! Conventions: `X_right = R * X_left + T` (raw camera frames); rectified frames are
+//! `X_rect_k = R_k * X_k`. After rectification a point at depth Z lies at the same row in both
+//! images and `u_left - u_right = fx * baseline / Z`.
+
+use crate::DatasetError;
+use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
+use slam_core::camera::distort_normalized;
+use slam_core::{Camera, Distortion, GrayImage, SensorKind};
+
+/// Fixed-point undistortion steps used when choosing the rectified intrinsics: OpenCV's
+/// `undistortPoints` default (5), not converged at EuRoC's image corners, but it is what
+/// ORB-SLAM2's EuRoC.yaml was computed with; with it we reproduce that file's rectified camera
+/// (fx 435.2047, cx 367.4517, cy 252.2009, bf 47.9064) to 1e-4 px. Converged undistortion would
+/// give fx 435.215. The remap maps themselves are exact (they only distort, never undistort).
+pub const OPENCV_UNDISTORT_ITERS: usize = 5;
+
+/// A raw (unrectified) camera as its calibration file describes it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawCamera {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Focal length x, pixels.
+    pub fx: f64,
+    /// Focal length y, pixels.
+    pub fy: f64,
+    /// Principal point x, pixels.
+    pub cx: f64,
+    /// Principal point y, pixels.
+    pub cy: f64,
+    /// Radial-tangential distortion (k3 = 0 for EuRoC's four coefficients).
+    pub distortion: Distortion,
+    /// T_body_sensor: pose of this camera in the body (IMU) frame.
+    pub t_bs: Isometry3<f64>,
+    /// Frame rate, Hz.
+    pub rate_hz: f64,
+}
+
+impl RawCamera {
+    /// Raw pixel of a point in normalised coordinates of this camera (applies distortion).
+    pub fn distort_project(&self, x: f64, y: f64) -> (f64, f64) {
+        let (xd, yd) = distort_normalized(&self.distortion, x, y);
+        (self.fx * xd + self.cx, self.fy * yd + self.cy)
+    }
+
+    /// Normalised undistorted coordinates of a raw pixel (fixed-point iteration as OpenCV's
+    /// `undistortPoints`, run to convergence instead of its default 5 steps).
+    pub fn undistort_normalize(&self, u: f64, v: f64) -> (f64, f64) {
+        self.undistort_normalize_iters(u, v, 100)
+    }
+
+    /// [`RawCamera::undistort_normalize`] with at most `iters` fixed-point steps.
+    pub fn undistort_normalize_iters(&self, u: f64, v: f64, iters: usize) -> (f64, f64) {
+        let xd = (u - self.cx) / self.fx;
+        let yd = (v - self.cy) / self.fy;
+        let d = &self.distortion;
+        let (mut x, mut y) = (xd, yd);
+        for _ in 0..iters {
+            let r2 = x * x + y * y;
+            let radial = 1.0 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+            let dx = 2.0 * d.p1 * x * y + d.p2 * (r2 + 2.0 * x * x);
+            let dy = d.p1 * (r2 + 2.0 * y * y) + 2.0 * d.p2 * x * y;
+            let (nx, ny) = ((xd - dx) / radial, (yd - dy) / radial);
+            let done = (nx - x).abs() < 1e-14 && (ny - y).abs() < 1e-14;
+            (x, y) = (nx, ny);
+            if done {
+                break;
+            }
+        }
+        (x, y)
+    }
+}
+
+/// Rectified-pixel -> raw-pixel lookup table of one camera, for bilinear resampling.
+#[derive(Clone, Debug)]
+pub struct RemapMap {
+    width: usize,
+    height: usize,
+    /// Raw x of each rectified pixel, row-major.
+    map_x: Vec<f32>,
+    /// Raw y of each rectified pixel, row-major.
+    map_y: Vec<f32>,
+}
+
+impl RemapMap {
+    /// Raw pixel sampled for rectified pixel (x, y).
+    pub fn lookup(&self, x: usize, y: usize) -> (f32, f32) {
+        let i = y * self.width + x;
+        (self.map_x[i], self.map_y[i])
+    }
+
+    /// Resamples `src` (the raw image) into the rectified image with bilinear interpolation;
+    /// pixels that map outside `src` are black (none with the default `alpha = 0` intrinsics,
+    /// except sub-pixel slivers at the border).
+    pub fn remap(&self, src: &GrayImage) -> GrayImage {
+        let mut out = GrayImage::new(self.width, self.height);
+        let (sw, sh) = (src.width as i64, src.height as i64);
+        for (o, (&mx, &my)) in out
+            .data
+            .iter_mut()
+            .zip(self.map_x.iter().zip(self.map_y.iter()))
+        {
+            let (x0f, y0f) = (mx.floor(), my.floor());
+            let (x0, y0) = (x0f as i64, y0f as i64);
+            if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
+                continue;
+            }
+            let (ax, ay) = (mx - x0f, my - y0f);
+            let px = |x: i64, y: i64| -> f32 {
+                if x < 0 || y < 0 || x >= sw || y >= sh {
+                    0.0
+                } else {
+                    src.data[(y * sw + x) as usize] as f32
+                }
+            };
+            let top = px(x0, y0) * (1.0 - ax) + px(x0 + 1, y0) * ax;
+            let bottom = px(x0, y0 + 1) * (1.0 - ax) + px(x0 + 1, y0 + 1) * ax;
+            let v = top * (1.0 - ay) + bottom * ay;
+            *o = (v + 0.5).clamp(0.0, 255.0) as u8;
+        }
+        out
+    }
+}
+
+/// A rectified stereo rig: rotations, shared intrinsics, baseline and remap maps.
+#[derive(Clone, Debug)]
+pub struct StereoRectification {
+    /// Rectifying rotation of the left camera (`X_rect = r_left * X_left_raw`).
+    pub r_left: Rotation3<f64>,
+    /// Rectifying rotation of the right camera.
+    pub r_right: Rotation3<f64>,
+    /// Shared rectified focal length (fx = fy), pixels.
+    pub focal: f64,
+    /// Shared rectified principal point, pixels.
+    pub principal_point: Vector2<f64>,
+    /// Distance between the optical centres, metres.
+    pub baseline: f64,
+    /// Image size (same as the raw left image).
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// T_body_rectified-left: the rectified left camera's pose in the body frame.
+    pub t_b_left: Isometry3<f64>,
+    left: RawCamera,
+    right: RawCamera,
+    map_left: RemapMap,
+    map_right: RemapMap,
+}
+
+/// `X_right = R X_left + T` from the two cameras' body extrinsics.
+pub fn relative_pose(left: &RawCamera, right: &RawCamera) -> Isometry3<f64> {
+    right.t_bs.inverse() * left.t_bs
+}
+
+impl StereoRectification {
+    /// Computes the rectification of a horizontal stereo pair from its two calibrations.
+    /// Fails when the cameras differ in size or the baseline is degenerate.
+    pub fn new(left: &RawCamera, right: &RawCamera) -> Result<Self, DatasetError> {
+        if (left.width, left.height) != (right.width, right.height) {
+            return Err(DatasetError::invalid(
+                "sensor.yaml",
+                format!(
+                    "left and right cameras differ in size ({}x{} vs {}x{})",
+                    left.width, left.height, right.width, right.height
+                ),
+            ));
+        }
+        let rel = relative_pose(left, right);
+        let r = rel.rotation.to_rotation_matrix();
+        let t_vec = rel.translation.vector;
+        let baseline = t_vec.norm();
+        if !(baseline.is_finite() && baseline > 1e-6) {
+            return Err(DatasetError::invalid(
+                "sensor.yaml",
+                format!("degenerate stereo baseline {baseline} m"),
+            ));
+        }
+        // Half rotations: the two cameras meet in the middle.
+        let om = r.scaled_axis();
+        let r_r = Rotation3::from_scaled_axis(-0.5 * om);
+        let t = r_r * t_vec;
+        // Rotate t onto the x axis (y for vertical rigs, which we do not expect but handle).
+        let idx = if t.x.abs() > t.y.abs() { 0 } else { 1 };
+        let c = t[idx];
+        let mut uu = Vector3::zeros();
+        uu[idx] = if c > 0.0 { 1.0 } else { -1.0 };
+        let mut ww = t.cross(&uu);
+        let nw = ww.norm();
+        if nw > 0.0 {
+            ww *= (c.abs() / t.norm()).clamp(-1.0, 1.0).acos() / nw;
+        }
+        let w_r = Rotation3::from_scaled_axis(ww);
+        let r_left = w_r * r_r.inverse();
+        let r_right = w_r * r_r;
+
+        let (nx, ny) = (left.width as f64, left.height as f64);
+        // Initial focal: the smaller (radially corrected) focal across the axis of the baseline.
+        let mut fc = f64::MAX;
+        for cam in [left, right] {
+            let mut f = if idx == 0 { cam.fy } else { cam.fx };
+            let k1 = cam.distortion.k1;
+            if k1 < 0.0 {
+                f *= 1.0 + k1 * (nx * nx + ny * ny) / (4.0 * f * f);
+            }
+            fc = fc.min(f);
+        }
+        // Principal points: centre the rectified image corners, then share them.
+        let mut cc = [Vector2::zeros(); 2];
+        for (k, (cam, rot)) in [(left, &r_left), (right, &r_right)].into_iter().enumerate() {
+            let mut avg = Vector2::zeros();
+            for (u, v) in [
+                (0.0, 0.0),
+                (nx - 1.0, 0.0),
+                (0.0, ny - 1.0),
+                (nx - 1.0, ny - 1.0),
+            ] {
+                avg += project_rotated(
+                    cam,
+                    rot,
+                    (u, v),
+                    fc,
+                    &Vector2::zeros(),
+                    OPENCV_UNDISTORT_ITERS,
+                );
+            }
+            avg /= 4.0;
+            cc[k] = Vector2::new((nx - 1.0) / 2.0, (ny - 1.0) / 2.0) - avg;
+        }
+        let c = (cc[0] + cc[1]) / 2.0;
+        // alpha = 0: scale the focal so the inner (all-valid) rectangle fills the image
+        // (OpenCV's formula, including its `width - cx` rather than `width - 1 - cx`).
+        let mut s = 0.0f64;
+        for (cam, rot) in [(left, &r_left), (right, &r_right)] {
+            let inner = inner_rectangle(cam, rot, fc, &c);
+            s = s
+                .max(c.x / (c.x - inner[0]))
+                .max(c.y / (c.y - inner[1]))
+                .max((nx - c.x) / (inner[2] - c.x))
+                .max((ny - c.y) / (inner[3] - c.y));
+        }
+        if !(s.is_finite() && s > 0.0) {
+            return Err(DatasetError::invalid(
+                "sensor.yaml",
+                "rectification failed: the cameras' views do not overlap",
+            ));
+        }
+        let focal = fc * s;
+
+        let t_b_left = left.t_bs
+            * Isometry3::from_parts(
+                Translation3::identity(),
+                UnitQuaternion::from_rotation_matrix(&r_left.inverse()),
+            );
+        let mut rect = StereoRectification {
+            r_left,
+            r_right,
+            focal,
+            principal_point: c,
+            baseline,
+            width: left.width,
+            height: left.height,
+            t_b_left,
+            left: left.clone(),
+            right: right.clone(),
+            map_left: RemapMap {
+                width: 0,
+                height: 0,
+                map_x: vec![],
+                map_y: vec![],
+            },
+            map_right: RemapMap {
+                width: 0,
+                height: 0,
+                map_x: vec![],
+                map_y: vec![],
+            },
+        };
+        rect.map_left = rect.build_map(false);
+        rect.map_right = rect.build_map(true);
+        Ok(rect)
+    }
+
+    fn build_map(&self, right: bool) -> RemapMap {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut map_x = Vec::with_capacity(w * h);
+        let mut map_y = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = self.raw_of_rectified(right, x as f64, y as f64);
+                map_x.push(u as f32);
+                map_y.push(v as f32);
+            }
+        }
+        RemapMap {
+            width: w,
+            height: h,
+            map_x,
+            map_y,
+        }
+    }
+
+    /// Raw pixel of the camera (left or `right`) seen at rectified pixel (u, v).
+    pub fn raw_of_rectified(&self, right: bool, u: f64, v: f64) -> (f64, f64) {
+        let (cam, rot) = if right {
+            (&self.right, &self.r_right)
+        } else {
+            (&self.left, &self.r_left)
+        };
+        let ray = Vector3::new(
+            (u - self.principal_point.x) / self.focal,
+            (v - self.principal_point.y) / self.focal,
+            1.0,
+        );
+        let p = rot.inverse() * ray;
+        cam.distort_project(p.x / p.z, p.y / p.z)
+    }
+
+    /// Rectified pixel of a raw pixel of the camera (left or `right`).
+    pub fn rectify_point(&self, right: bool, u: f64, v: f64) -> (f64, f64) {
+        let (cam, rot) = if right {
+            (&self.right, &self.r_right)
+        } else {
+            (&self.left, &self.r_left)
+        };
+        let p = project_rotated(cam, rot, (u, v), self.focal, &self.principal_point, 100);
+        (p.x, p.y)
+    }
+
+    /// Rectifies a raw left image.
+    pub fn rectify_left(&self, raw: &GrayImage) -> GrayImage {
+        self.map_left.remap(raw)
+    }
+
+    /// Rectifies a raw right image.
+    pub fn rectify_right(&self, raw: &GrayImage) -> GrayImage {
+        self.map_right.remap(raw)
+    }
+
+    /// The left map (rectified pixel -> raw pixel).
+    pub fn map_left(&self) -> &RemapMap {
+        &self.map_left
+    }
+
+    /// The rectified camera slam-core sees: shared intrinsics, no distortion, `bf = focal *
+    /// baseline`, stereo sensor, fps from the calibration, `th_depth` as given.
+    pub fn camera(&self, th_depth: f64) -> Camera {
+        Camera {
+            fx: self.focal,
+            fy: self.focal,
+            cx: self.principal_point.x,
+            cy: self.principal_point.y,
+            width: self.width,
+            height: self.height,
+            distortion: None,
+            bf: self.focal * self.baseline,
+            th_depth,
+            fps: self.left.rate_hz,
+            sensor: SensorKind::Stereo,
+        }
+    }
+}
+
+/// Raw pixel (u, v) -> undistorted ray (`iters` fixed-point steps) -> rotated by `rot` ->
+/// pinhole with focal `f` and principal point `c`.
+fn project_rotated(
+    cam: &RawCamera,
+    rot: &Rotation3<f64>,
+    (u, v): (f64, f64),
+    f: f64,
+    c: &Vector2<f64>,
+    iters: usize,
+) -> Vector2<f64> {
+    let (x, y) = cam.undistort_normalize_iters(u, v, iters);
+    let p = rot * Vector3::new(x, y, 1.0);
+    Vector2::new(f * p.x / p.z + c.x, f * p.y / p.z + c.y)
+}
+
+/// OpenCV's inner rectangle (x0, y0, x1, y1) of a camera's valid rectified region, from a 9x9
+/// grid of raw pixels spanning the image: the largest extent of the left column, smallest of the
+/// right column, and likewise for rows.
+fn inner_rectangle(cam: &RawCamera, rot: &Rotation3<f64>, f: f64, c: &Vector2<f64>) -> [f64; 4] {
+    const N: usize = 9;
+    let (w, h) = (cam.width as f64, cam.height as f64);
+    let (mut x0, mut y0, mut x1, mut y1) = (f64::MIN, f64::MIN, f64::MAX, f64::MAX);
+    for j in 0..N {
+        for i in 0..N {
+            let u = i as f64 * w / (N - 1) as f64;
+            let v = j as f64 * h / (N - 1) as f64;
+            let p = project_rotated(cam, rot, (u, v), f, c, OPENCV_UNDISTORT_ITERS);
+            if i == 0 {
+                x0 = x0.max(p.x);
+            }
+            if i == N - 1 {
+                x1 = x1.min(p.x);
+            }
+            if j == 0 {
+                y0 = y0.max(p.y);
+            }
+            if j == N - 1 {
+                y1 = y1.min(p.y);
+            }
+        }
+    }
+    [x0, y0, x1, y1]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rig(rot_left: Vector3<f64>, rot_right: Vector3<f64>) -> (RawCamera, RawCamera) {
+        let d = Distortion {
+            k1: -0.25,
+            k2: 0.07,
+            p1: 0.0003,
+            p2: -0.0002,
+            k3: 0.0,
+        };
+        let left = RawCamera {
+            width: 640,
+            height: 480,
+            fx: 460.0,
+            fy: 458.0,
+            cx: 322.0,
+            cy: 243.0,
+            distortion: d,
+            t_bs: Isometry3::new(Vector3::new(0.01, -0.05, 0.02), rot_left),
+            rate_hz: 20.0,
+        };
+        let right = RawCamera {
+            fx: 455.0,
+            fy: 454.0,
+            cx: 318.0,
+            cy: 250.0,
+            distortion: Distortion { k1: -0.27, ..d },
+            t_bs: left.t_bs
+                * Isometry3::new(Vector3::new(0.12, 0.003, -0.002), rot_right - rot_left),
+            ..left.clone()
+        };
+        (left, right)
+    }
+
+    #[test]
+    fn rectified_rows_agree_and_baseline_is_kept() {
+        let (l, r) = rig(
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(0.01, -0.02, 0.015),
+        );
+        let rect = StereoRectification::new(&l, &r).unwrap();
+        assert!((rect.baseline - Vector3::<f64>::new(0.12, 0.003, -0.002).norm()).abs() < 1e-12);
+        let rel = relative_pose(&l, &r);
+        // Points in front of the rig: project raw (distorted), rectify, compare rows.
+        for (x, y, z) in [
+            (0.3, 0.2, 2.0),
+            (-0.8, -0.5, 3.0),
+            (0.0, 0.0, 1.5),
+            (1.0, -0.6, 4.0),
+        ] {
+            let pl = Vector3::new(x, y, z);
+            let pr = rel * nalgebra::Point3::from(pl);
+            let (ul, vl) = l.distort_project(pl.x / pl.z, pl.y / pl.z);
+            let (ur, vr) = r.distort_project(pr.x / pr.z, pr.y / pr.z);
+            let (a, b) = (
+                rect.rectify_point(false, ul, vl),
+                rect.rectify_point(true, ur, vr),
+            );
+            assert!((a.1 - b.1).abs() < 1e-6, "rows {} vs {}", a.1, b.1);
+            // Disparity = f * B / Z_rect.
+            let z_rect = (rect.r_left * pl).z;
+            let disp = a.0 - b.0;
+            assert!((disp - rect.focal * rect.baseline / z_rect).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn maps_invert_point_rectification() {
+        let (l, r) = rig(Vector3::new(0.0, 0.01, 0.0), Vector3::new(0.0, -0.01, 0.01));
+        let rect = StereoRectification::new(&l, &r).unwrap();
+        for (u, v) in [(10.0, 20.0), (320.0, 240.0), (600.0, 400.0)] {
+            let (ru, rv) = rect.raw_of_rectified(true, u, v);
+            let (bu, bv) = rect.rectify_point(true, ru, rv);
+            assert!((bu - u).abs() < 1e-6 && (bv - v).abs() < 1e-6);
+        }
+        // alpha = 0: every rectified pixel samples inside the raw image.
+        let m = rect.map_left();
+        for (x, y) in [(0, 0), (639, 0), (0, 479), (639, 479), (320, 0), (0, 240)] {
+            let (mx, my) = m.lookup(x, y);
+            assert!(
+                mx > -0.5 && my > -0.5 && mx < 640.0 && my < 480.0,
+                "{mx},{my}"
+            );
+        }
+    }
+
+    #[test]
+    fn identity_rig_is_identity() {
+        let mut l = rig(Vector3::zeros(), Vector3::zeros()).0;
+        l.distortion = Distortion {
+            k1: 0.0,
+            k2: 0.0,
+            p1: 0.0,
+            p2: 0.0,
+            k3: 0.0,
+        };
+        l.fx = l.fy;
+        let mut r = l.clone();
+        r.t_bs = l.t_bs * Isometry3::translation(0.1, 0.0, 0.0);
+        let rect = StereoRectification::new(&l, &r).unwrap();
+        assert!((rect.focal - l.fy).abs() < 1e-9, "{}", rect.focal);
+        let img = GrayImage {
+            width: 640,
+            height: 480,
+            data: (0..640 * 480).map(|i| (i * 7 % 251) as u8).collect(),
+        };
+        assert_eq!(rect.rectify_left(&img).data, img.data);
+    }
+}

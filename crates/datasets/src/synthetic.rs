@@ -1,0 +1,46 @@
+//! In-memory synthetic sequences: the frames of a `synth::Generator` wrapped as a [`Sequence`]
+//! without touching the disk (the embedded default of `noisefree run`). Frames are rendered in
+//! parallel with rayon; their order and bytes do not depend on the thread count.
+
+use crate::{Format, Sequence};
+use rayon::prelude::*;
+use slam_core::{FrameInput, SensorKind};
+use std::sync::Arc;
+
+/// The first `n_frames` frames of `gen` with exact ground truth (T_world_camera, TUM
+/// convention). RGB-D presets give [`Format::TumRgbd`], stereo presets [`Format::EurocStereo`]
+/// without `t_bs` (their ground truth is already the camera pose).
+pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
+    let camera = gen.camera();
+    let rendered: Vec<synth::SynthFrame> = (0..n_frames)
+        .into_par_iter()
+        .map(|i| gen.frame(i))
+        .collect();
+    let mut stamps = Vec::with_capacity(n_frames);
+    let mut poses = Vec::with_capacity(n_frames);
+    let frames = rendered
+        .into_iter()
+        .map(|f| {
+            stamps.push(f.timestamp);
+            poses.push(f.pose_wc);
+            FrameInput {
+                timestamp: f.timestamp,
+                image: Arc::new(f.gray),
+                depth: f.depth.map(Arc::new),
+                right: f.right.map(Arc::new),
+            }
+        })
+        .collect();
+    let format = match camera.sensor {
+        SensorKind::Rgbd => Format::TumRgbd,
+        SensorKind::Stereo => Format::EurocStereo,
+    };
+    Sequence {
+        name: format!("synthetic-seed{}", gen.seed()),
+        camera,
+        frames,
+        groundtruth: Some(ate_eval::Trajectory { stamps, poses }),
+        t_bs: None,
+        format,
+    }
+}

@@ -1,0 +1,340 @@
+//! TUM RGB-D reader: `rgb.txt` and `depth.txt` associated by nearest timestamp (as TUM's
+//! `associate.py`: all pairs closer than 0.02 s, taken greedily by |dt|, each stamp used once),
+//! or `associations.txt` (ORB-SLAM2's format) when present; `groundtruth.txt` when present.
+//! Images are decoded in parallel with rayon; frame order is the rgb time order.
+
+use crate::cameras::CameraId;
+use crate::decode::{read_depth, read_gray};
+use crate::{DatasetError, Format, Sequence};
+use rayon::prelude::*;
+use slam_core::{Camera, FrameInput};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Options of the TUM reader. `Default` gives the paper's (ORB-SLAM2's) settings.
+#[derive(Clone, Debug, Default)]
+pub struct TumOptions {
+    /// Camera to use; `None`: chosen by the freiburg id in the folder name, fr3 when none.
+    pub camera: Option<Camera>,
+    /// Depth PNG value per metre; `None`: ORB-SLAM2's factor for the detected camera
+    /// (5208 for fr2, 5000 otherwise; the TUM site says 5000 for all).
+    pub depth_factor: Option<f64>,
+    /// Maximum |t_rgb - t_depth| in seconds for association; `None`: 0.02 s (associate.py).
+    pub max_difference: Option<f64>,
+    /// Read at most this many frames (after association); `None`: all.
+    pub max_frames: Option<usize>,
+}
+
+/// Default association window of TUM's `associate.py`, seconds.
+pub const MAX_DIFFERENCE: f64 = 0.02;
+
+/// One line of a TUM list file: timestamp, file (relative to the sequence folder), line number.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ListEntry {
+    /// Timestamp in seconds.
+    pub stamp: f64,
+    /// File path relative to the sequence folder.
+    pub file: String,
+    /// 1-based line in the list file.
+    pub line: usize,
+}
+
+fn read_text(path: &Path, what: &str) -> Result<String, DatasetError> {
+    if !path.is_file() {
+        return Err(DatasetError::Missing {
+            path: path.to_path_buf(),
+            what: what.into(),
+        });
+    }
+    std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))
+}
+
+fn parse_stamp(path: &Path, line: usize, s: &str) -> Result<f64, DatasetError> {
+    match s.parse::<f64>() {
+        Ok(t) if t.is_finite() => Ok(t),
+        _ => Err(DatasetError::parse(
+            path,
+            line,
+            format!("bad timestamp `{s}`"),
+        )),
+    }
+}
+
+/// Parses a TUM `rgb.txt` / `depth.txt` (`timestamp filename`, `#` comments). Timestamps must
+/// not decrease.
+pub fn read_list(path: &Path) -> Result<Vec<ListEntry>, DatasetError> {
+    let text = read_text(path, "a TUM RGB-D image list (timestamp filename per line)")?;
+    let mut out: Vec<ListEntry> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let mut it = l.split_whitespace();
+        let (Some(ts), Some(file)) = (it.next(), it.next()) else {
+            return Err(DatasetError::parse(
+                path,
+                line,
+                "expected `timestamp filename`",
+            ));
+        };
+        let stamp = parse_stamp(path, line, ts)?;
+        if let Some(prev) = out.last() {
+            if stamp < prev.stamp {
+                return Err(DatasetError::parse(
+                    path,
+                    line,
+                    format!(
+                        "timestamp {stamp} goes back in time (previous {} on line {})",
+                        prev.stamp, prev.line
+                    ),
+                ));
+            }
+        }
+        out.push(ListEntry {
+            stamp,
+            file: file.to_string(),
+            line,
+        });
+    }
+    Ok(out)
+}
+
+/// Parses ORB-SLAM2's `associations.txt`: `t_rgb rgb_file t_depth depth_file` per line.
+pub fn read_associations(path: &Path) -> Result<Vec<(ListEntry, ListEntry)>, DatasetError> {
+    let text = read_text(path, "an association file")?;
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let f: Vec<&str> = l.split_whitespace().collect();
+        if f.len() < 4 {
+            return Err(DatasetError::parse(
+                path,
+                line,
+                "expected `t_rgb rgb_file t_depth depth_file`",
+            ));
+        }
+        out.push((
+            ListEntry {
+                stamp: parse_stamp(path, line, f[0])?,
+                file: f[1].into(),
+                line,
+            },
+            ListEntry {
+                stamp: parse_stamp(path, line, f[2])?,
+                file: f[3].into(),
+                line,
+            },
+        ));
+    }
+    Ok(out)
+}
+
+/// Associates two time-sorted stamp lists like TUM's `associate.py`: every pair with
+/// |a - b| < `max_difference` is a candidate, candidates are taken greedily by increasing |dt|
+/// (ties by index), each stamp at most once. Returns index pairs sorted by the first list.
+pub fn associate(a: &[f64], b: &[f64], max_difference: f64) -> Vec<(usize, usize)> {
+    let mut cand: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, &ta) in a.iter().enumerate() {
+        let start = b.partition_point(|&tb| tb <= ta - max_difference);
+        for (j, &tb) in b.iter().enumerate().skip(start) {
+            if tb >= ta + max_difference {
+                break;
+            }
+            let dt = (ta - tb).abs();
+            if dt < max_difference {
+                cand.push((dt, i, j));
+            }
+        }
+    }
+    cand.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+    let (mut used_a, mut used_b) = (vec![false; a.len()], vec![false; b.len()]);
+    let mut pairs = Vec::new();
+    for (_, i, j) in cand {
+        if !used_a[i] && !used_b[j] {
+            used_a[i] = true;
+            used_b[j] = true;
+            pairs.push((i, j));
+        }
+    }
+    pairs.sort_unstable();
+    pairs
+}
+
+/// Loads a TUM RGB-D folder with the paper's defaults; `camera` overrides the camera detected
+/// from the folder name (fr1/fr2/fr3; fr3 when the name has no freiburg id).
+pub fn load_tum(dir: &Path, camera: Option<Camera>) -> Result<Sequence, DatasetError> {
+    load_tum_with(
+        dir,
+        &TumOptions {
+            camera,
+            ..TumOptions::default()
+        },
+    )
+}
+
+/// The folder's own name (resolving `.` and trailing separators).
+pub(crate) fn folder_name(dir: &Path) -> String {
+    let abs = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    abs.file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| dir.display().to_string())
+}
+
+/// Loads a TUM RGB-D folder with explicit options.
+pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetError> {
+    if !dir.is_dir() {
+        return Err(DatasetError::Missing {
+            path: dir.to_path_buf(),
+            what: "a TUM RGB-D sequence folder".into(),
+        });
+    }
+    let name = folder_name(dir);
+    let id = CameraId::detect_tum(&name).unwrap_or(CameraId::Fr3);
+    let camera = match &opts.camera {
+        Some(c) => c.clone(),
+        None => id.tum_camera().unwrap_or_else(Camera::tum_fr3),
+    };
+    let depth_factor = opts
+        .depth_factor
+        .unwrap_or_else(|| id.orbslam2_depth_factor());
+    if !(depth_factor.is_finite() && depth_factor > 0.0) {
+        return Err(DatasetError::invalid(
+            dir,
+            format!("depth factor must be positive, got {depth_factor}"),
+        ));
+    }
+    let max_dt = opts.max_difference.unwrap_or(MAX_DIFFERENCE);
+
+    let assoc_path = dir.join("associations.txt");
+    let mut pairs: Vec<(ListEntry, ListEntry)> = if assoc_path.is_file() {
+        read_associations(&assoc_path)?
+    } else {
+        let rgb = read_list(&dir.join("rgb.txt"))?;
+        let depth = read_list(&dir.join("depth.txt"))?;
+        let ta: Vec<f64> = rgb.iter().map(|e| e.stamp).collect();
+        let tb: Vec<f64> = depth.iter().map(|e| e.stamp).collect();
+        associate(&ta, &tb, max_dt)
+            .into_iter()
+            .map(|(i, j)| (rgb[i].clone(), depth[j].clone()))
+            .collect()
+    };
+    if let Some(n) = opts.max_frames {
+        pairs.truncate(n);
+    }
+    if pairs.is_empty() {
+        return Err(DatasetError::invalid(
+            dir,
+            "no rgb/depth pairs (empty lists, or no depth within the association window)",
+        ));
+    }
+
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let frames = pairs
+        .par_iter()
+        .map(|(rgb, depth)| -> Result<FrameInput, DatasetError> {
+            let rgb_path = dir.join(&rgb.file);
+            let depth_path = dir.join(&depth.file);
+            let image = read_gray(&rgb_path)?;
+            check_size(&rgb_path, image.width, image.height, w, h, "the camera")?;
+            let d = read_depth(&depth_path, depth_factor)?;
+            check_size(
+                &depth_path,
+                d.width,
+                d.height,
+                image.width,
+                image.height,
+                "its rgb image",
+            )?;
+            Ok(FrameInput {
+                timestamp: rgb.stamp,
+                image: Arc::new(image),
+                depth: Some(Arc::new(d)),
+                right: None,
+            })
+        })
+        .collect::<Vec<Result<FrameInput, DatasetError>>>()
+        // First error in frame order, whatever thread hit it first.
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
+
+    let gt_path = dir.join("groundtruth.txt");
+    let groundtruth = if gt_path.is_file() {
+        Some(read_tum_groundtruth(&gt_path)?)
+    } else {
+        None
+    };
+    Ok(Sequence {
+        name,
+        camera,
+        frames,
+        groundtruth,
+        t_bs: None,
+        format: Format::TumRgbd,
+    })
+}
+
+pub(crate) fn read_tum_groundtruth(path: &Path) -> Result<ate_eval::Trajectory, DatasetError> {
+    ate_eval::io::read_tum(path).map_err(|e| DatasetError::GroundTruth {
+        path: path.to_path_buf(),
+        msg: e.to_string(),
+    })
+}
+
+pub(crate) fn check_size(
+    path: &Path,
+    found_w: usize,
+    found_h: usize,
+    expected_w: usize,
+    expected_h: usize,
+    what: &str,
+) -> Result<(), DatasetError> {
+    if (found_w, found_h) != (expected_w, expected_h) {
+        return Err(DatasetError::SizeMismatch {
+            path: PathBuf::from(path),
+            found_w,
+            found_h,
+            expected_w,
+            expected_h,
+            what: what.into(),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn associate_is_greedy_by_dt_and_unique() {
+        // a[1] and a[2] both want b[1]; a[2] is closer, a[1] falls back to nothing in range.
+        let a = [0.0, 1.0, 1.015, 2.0];
+        let b = [0.005, 1.012, 2.03];
+        let p = associate(&a, &b, 0.02);
+        assert_eq!(p, vec![(0, 0), (2, 1)]);
+    }
+
+    #[test]
+    fn associate_respects_strict_window() {
+        assert!(associate(&[0.0], &[0.02], 0.02).is_empty());
+        assert_eq!(associate(&[0.0], &[0.0199], 0.02), vec![(0, 0)]);
+    }
+
+    #[test]
+    fn list_rejects_time_going_back_with_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("rgb.txt");
+        std::fs::write(&p, "# c\n1.0 rgb/a.png\n0.5 rgb/b.png\n").unwrap();
+        let e = read_list(&p).unwrap_err().to_string();
+        assert!(e.contains("rgb.txt:3"), "{e}");
+        std::fs::write(&p, "1.0 rgb/a.png\nabc rgb/b.png\n").unwrap();
+        let e = read_list(&p).unwrap_err().to_string();
+        assert!(e.contains("rgb.txt:2") && e.contains("abc"), "{e}");
+    }
+}

@@ -1,0 +1,194 @@
+//! Benchmarks of the two solvers at ORB-SLAM2's working sizes, single thread: pose-only
+//! optimization of a frame with 500 matches (10 % mismatches), and local bundle adjustment of
+//! 20 keyframes / 2000 points / ~15k observations (60 % RGB-D, 40 % monocular keypoints).
+//!
+//! Run: `flock /tmp/nf-cargo.lock cargo bench -p slam-core --bench optimize`.
+
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use slam_core::optimize::{
+    local_bundle_adjustment, pose_optimization, BaConfig, BaKeyFrame, BaObservation, BaPoint,
+    BaProblem, Measurement, PoseObservation, PoseOptConfig,
+};
+use slam_core::Camera;
+
+/// A standard normal sample (Box-Muller).
+fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
+    let u1: f64 = rng.random::<f64>().max(1e-300);
+    let u2: f64 = rng.random();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// A pose near `tcw`: camera centre moved by `metres`, orientation turned by `radians`.
+fn perturb(
+    tcw: &Isometry3<f64>,
+    metres: f64,
+    radians: f64,
+    rng: &mut ChaCha8Rng,
+) -> Isometry3<f64> {
+    let dir = Vector3::new(gaussian(rng), gaussian(rng), gaussian(rng)).normalize();
+    let axis = Vector3::new(gaussian(rng), gaussian(rng), gaussian(rng)).normalize();
+    let twc = tcw.inverse();
+    Isometry3::from_parts(
+        Translation3::from(twc.translation.vector + dir * metres),
+        twc.rotation * UnitQuaternion::from_scaled_axis(axis * radians),
+    )
+    .inverse()
+}
+
+/// A noisy keypoint of `pw` seen from `tcw` (1 px x octave scale), or `None` if not visible.
+fn observe(
+    camera: &Camera,
+    tcw: &Isometry3<f64>,
+    pw: &Vector3<f64>,
+    rng: &mut ChaCha8Rng,
+) -> Option<(Measurement, f64)> {
+    let p = (tcw * Point3::from(*pw)).coords;
+    if p.z < 0.1 {
+        return None;
+    }
+    let uv = camera.project(&p);
+    if !camera.in_image(uv.x, uv.y) {
+        return None;
+    }
+    let octave = rng.random_range(0..4);
+    let sigma = 1.2f64.powi(octave);
+    let (u, v) = (uv.x + sigma * gaussian(rng), uv.y + sigma * gaussian(rng));
+    let m = if rng.random_bool(0.6) {
+        Measurement::rgbd(camera, u, v, p.z * (1.0 + 0.01 * gaussian(rng)))
+    } else {
+        Measurement::Mono { u, v }
+    };
+    Some((m, 1.0 / (sigma * sigma)))
+}
+
+fn pose_only_input(camera: &Camera) -> (Isometry3<f64>, Vec<PoseObservation>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let tcw = Isometry3::from_parts(
+        Translation3::new(0.1, -0.2, 0.3),
+        UnitQuaternion::from_euler_angles(0.1, 0.2, -0.1),
+    );
+    let twc = tcw.inverse();
+    let mut obs = Vec::new();
+    while obs.len() < 500 {
+        let p_c = camera.unproject(
+            rng.random_range(0.0..640.0),
+            rng.random_range(0.0..480.0),
+            rng.random_range(0.8..6.0),
+        );
+        let pw = (twc * Point3::from(p_c)).coords;
+        let Some((mut measurement, inv_sigma2)) = observe(camera, &tcw, &pw, &mut rng) else {
+            continue;
+        };
+        if rng.random_bool(0.1) {
+            measurement = Measurement::Mono {
+                u: rng.random_range(0.0..640.0),
+                v: rng.random_range(0.0..480.0),
+            };
+        }
+        obs.push(PoseObservation {
+            point_world: pw,
+            measurement,
+            inv_sigma2,
+        });
+    }
+    (perturb(&tcw, 0.03, 1f64.to_radians(), &mut rng), obs)
+}
+
+fn local_ba_input(camera: &Camera) -> BaProblem {
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let n_kf = 20;
+    let gt: Vec<Isometry3<f64>> = (0..n_kf)
+        .map(|i| {
+            let s = i as f64 / (n_kf - 1) as f64;
+            let centre = Vector3::new(
+                -1.0 + 2.0 * s,
+                0.05 * gaussian(&mut rng),
+                0.1 * gaussian(&mut rng),
+            );
+            let rot = UnitQuaternion::from_euler_angles(
+                0.02 * gaussian(&mut rng),
+                0.2 * (s - 0.5),
+                0.02 * gaussian(&mut rng),
+            );
+            Isometry3::from_parts(Translation3::from(centre), rot).inverse()
+        })
+        .collect();
+    let mut problem = BaProblem::default();
+    while problem.points.len() < 2000 {
+        let pw = Vector3::new(
+            rng.random_range(-3.0..3.0),
+            rng.random_range(-1.5..1.5),
+            rng.random_range(2.0..6.0),
+        );
+        // A track over a run of consecutive keyframes (3..=14, ~8.5 on average).
+        let len = rng.random_range(3..=14);
+        let start = rng.random_range(0..=n_kf - len);
+        let j = problem.points.len();
+        let before = problem.observations.len();
+        for (k, tcw) in gt.iter().enumerate().skip(start).take(len) {
+            if let Some((measurement, inv_sigma2)) = observe(camera, tcw, &pw, &mut rng) {
+                problem.observations.push(BaObservation {
+                    keyframe: k,
+                    point: j,
+                    measurement,
+                    inv_sigma2,
+                });
+            }
+        }
+        if problem.observations.len() - before < 2 {
+            problem.observations.truncate(before);
+            continue;
+        }
+        let noise = Vector3::new(gaussian(&mut rng), gaussian(&mut rng), gaussian(&mut rng)) * 0.03;
+        problem.points.push(BaPoint {
+            position: pw + noise,
+        });
+    }
+    problem.keyframes = gt
+        .iter()
+        .enumerate()
+        .map(|(k, t)| BaKeyFrame {
+            tcw: if k == 0 {
+                *t
+            } else {
+                perturb(t, 0.01, 0.5f64.to_radians(), &mut rng)
+            },
+            fixed: k == 0,
+        })
+        .collect();
+    problem
+}
+
+fn bench_optimize(c: &mut Criterion) {
+    let camera = Camera::tum_fr3();
+    let (start, obs) = pose_only_input(&camera);
+    let cfg = PoseOptConfig::default();
+    c.bench_function("pose_only_500_obs", |b| {
+        b.iter(|| pose_optimization(&camera, &start, &obs, &cfg))
+    });
+
+    let problem = local_ba_input(&camera);
+    eprintln!(
+        "local BA problem: {} keyframes, {} points, {} observations",
+        problem.keyframes.len(),
+        problem.points.len(),
+        problem.observations.len()
+    );
+    let ba_cfg = BaConfig::default();
+    let mut group = c.benchmark_group("local_ba");
+    group.sample_size(20);
+    group.bench_function("20kf_2000pts", |b| {
+        b.iter_batched(
+            || problem.clone(),
+            |mut p| local_bundle_adjustment(&camera, &mut p, &ba_cfg),
+            BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_optimize);
+criterion_main!(benches);

@@ -1,0 +1,51 @@
+//! Parameters of the paper's two noise-resilience techniques. They are switched on by
+//! `Config::mcor` / `Config::avc`; the algorithms live in [`crate::techniques`] and plug into the
+//! hook points of [`crate::module::pose_estimation`] (MC-OR gates observations before every
+//! pose-optimization round; AVC replaces the residual of keypoints with depth, in pose-only
+//! optimization and in local BA).
+
+use serde::{Deserialize, Serialize};
+
+/// Map-point Consensus based Outlier Rejection (paper III-A, Algorithm 1): thresholds on the
+/// feature-level and cluster-level distances between a map point M, the running centroid G of
+/// its back-projected observations and each observation X_i. Metres unless `depth_normalised`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct McorParams {
+    /// tau_{M,F}: max |M - X_i| (and its cluster mean), metres. Paper optimum 0.7.
+    pub tau_mf: f64,
+    /// tau_{G,F}: max |G - X_i| (and its cluster mean), metres. Paper optimum 0.7.
+    pub tau_gf: f64,
+    /// tau_{M,G}: max |M - G|, metres. Paper optimum 0.5.
+    pub tau_mg: f64,
+    /// Divide every distance by the measured depth of the feature it involves (CL3 by the mean
+    /// depth of the cluster's features), making the thresholds fractions of depth (e.g. 0.1 =
+    /// 10 %); a variant the paper does not use (default false: metres, as the paper).
+    pub depth_normalised: bool,
+}
+
+impl Default for McorParams {
+    fn default() -> Self {
+        McorParams {
+            tau_mf: 0.7,
+            tau_gf: 0.7,
+            tau_mg: 0.5,
+            depth_normalised: false,
+        }
+    }
+}
+
+/// Adaptive Virtual Camera (paper III-B, Eq. 8-12): the 4-D residual projected on a virtual
+/// camera displaced by `baseline` along the in-image component of the depth error.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AvcParams {
+    /// Virtual camera baseline b, metres (paper default 0.09; Table I sweeps 0.01..0.13).
+    pub baseline: f64,
+}
+
+impl Default for AvcParams {
+    fn default() -> Self {
+        AvcParams { baseline: 0.09 }
+    }
+}

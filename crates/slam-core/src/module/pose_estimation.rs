@@ -1,0 +1,467 @@
+//! Pose-only optimization of a tracked frame against its matched map points (ORB-SLAM2's
+//! Optimizer::PoseOptimization as called by tracking and relocalization), with the paper's two
+//! techniques plugged into its hook points:
+//! 1. [`measurement_for`]: the residual built for one keypoint (ORB-SLAM2: 2-D mono or 3-D
+//!    stereo / RGB-D with `ur = u - bf / depth`); with AVC on, a keypoint with measured depth gets
+//!    the 4-D [`VirtualCameraResidual`] instead (also in local BA, which calls this too);
+//! 2. the `between_rounds` gate of [`optimize_frame_pose`], run before every optimization round
+//!    with the current pose: MC-OR ([`mcor_frame_gate`]) excludes observations there, and AVC
+//!    re-aims every virtual camera from the current pose.
+//!
+//! MC-OR clusters are not stored: a map point's cluster is derived from its keyframe
+//! observations when a frame is gated — each observing keyframe's keypoint back-projected with
+//! its measured depth and placed with that keyframe's *current* pose (so clusters follow local
+//! BA's corrections for free, and memory is what the map already holds; the transient
+//! [`McorCluster`] caps itself at [`crate::techniques::MCOR_CLUSTER_CAPACITY`] features, folding
+//! older ones into the centroid's running sum). Keyframe poses do not change during a pose
+//! optimization, so the clusters are built once per call and only the current frame's feature
+//! moves between rounds. MC-OR gates pose-only optimization only (the paper: it acts "before
+//! every run of the pose optimization block"); local BA keeps ORB-SLAM2's chi2 outlier erasure.
+
+use std::sync::Arc;
+
+use nalgebra::{Isometry3, Point3, Vector3};
+
+use super::noise::{AvcParams, McorParams};
+use crate::camera::Camera;
+use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
+use crate::optimize::{pose_optimization_with, Measurement, PoseObservation, PoseOptConfig};
+use crate::techniques::{
+    mcor_gate, ClusterFeature, McorCluster, McorMatch, McorOutcome, VirtualCameraResidual,
+};
+
+/// `t` with its rotation quaternion renormalised. Products of unit quaternions drift off unit
+/// norm by rounding, and the constant-velocity model (`V = T_c T_l^-1`, then `V T_c`) multiplies
+/// those norms frame after frame, so without this the drift grows exponentially (a quaternion of
+/// norm 0.5 after ~40 frames, i.e. a scaled rotation). Every pose the system keeps goes through it.
+pub fn renormalized(t: &Isometry3<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        t.translation,
+        nalgebra::UnitQuaternion::new_normalize(*t.rotation.quaternion()),
+    )
+}
+
+/// The techniques switched on for a run (both `None` = ORB-SLAM2 baseline).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoiseHooks<'a> {
+    /// MC-OR parameters when on.
+    pub mcor: Option<&'a McorParams>,
+    /// AVC parameters when on.
+    pub avc: Option<&'a AvcParams>,
+}
+
+/// The measurement of keypoint `i` (hook point 1). Baseline: stereo / RGB-D keypoints with a
+/// right coordinate give the 3-D residual, others the 2-D one. With `hooks.avc` set, a keypoint
+/// with measured depth gets the 4-D AVC residual, its virtual camera aimed from `estimate`, the
+/// current estimate of the map point in this camera's coordinates (metres).
+pub fn measurement_for(
+    camera: &Camera,
+    features: &Features,
+    i: usize,
+    hooks: &NoiseHooks,
+    estimate: &Vector3<f64>,
+) -> Measurement {
+    if let Some(r) = avc_residual_for(camera, features, i, hooks, estimate) {
+        return Measurement::Custom(r);
+    }
+    let kp = &features.keypoints[i];
+    match features.u_right_of(i) {
+        Some(ur) => Measurement::Stereo {
+            u: kp.x as f64,
+            v: kp.y as f64,
+            ur,
+        },
+        None => Measurement::Mono {
+            u: kp.x as f64,
+            v: kp.y as f64,
+        },
+    }
+}
+
+/// The AVC residual of keypoint `i` when AVC is on and the keypoint has a measured depth.
+fn avc_residual_for(
+    camera: &Camera,
+    features: &Features,
+    i: usize,
+    hooks: &NoiseHooks,
+    estimate: &Vector3<f64>,
+) -> Option<Arc<VirtualCameraResidual>> {
+    let avc = hooks.avc?;
+    let depth = features.depth_of(i)?;
+    let kp = &features.keypoints[i];
+    VirtualCameraResidual::new(
+        camera,
+        kp.x as f64,
+        kp.y as f64,
+        depth,
+        avc.baseline,
+        estimate,
+    )
+    .map(Arc::new)
+}
+
+/// The MC-OR cluster of map point `mp`: every observing (good) keyframe's keypoint with a
+/// measured depth, back-projected and placed with the keyframe's current pose, in keyframe-id
+/// order (so the ring keeps the most recent keyframes).
+pub fn map_point_cluster(map: &Map, mp: crate::data::MapPointId, camera: &Camera) -> McorCluster {
+    let mut cluster = McorCluster::new();
+    let Some(m) = map.map_point(mp) else {
+        return cluster;
+    };
+    for (&kf, &idx) in &m.observations {
+        let Some(k) = map.keyframe(kf) else {
+            continue;
+        };
+        let Some(pc) = k.features.unproject_camera(idx, camera) else {
+            continue;
+        };
+        if let Some(f) = ClusterFeature::new(kf.0 as u64, pc, &k.tcw.inverse()) {
+            cluster.push(f);
+        }
+    }
+    cluster
+}
+
+/// Algorithm 1 over the matches of `frame` at pose `tcw` (world -> camera), as the gate of
+/// [`optimize_frame_pose`] runs it; returns the matched keypoint indices (ascending) and the
+/// outcome per match. For analyses (paper Fig. 7, 8) and the per-frame statistics.
+pub fn mcor_frame_gate(
+    frame: &TrackedFrame,
+    map: &Map,
+    camera: &Camera,
+    params: &McorParams,
+    tcw: &Isometry3<f64>,
+) -> (Vec<usize>, McorOutcome) {
+    let mut index = Vec::new();
+    let mut clusters = Vec::new();
+    let mut positions = Vec::new();
+    for i in 0..frame.len() {
+        let Some(id) = frame.map_points[i] else {
+            continue;
+        };
+        let Some(mp) = map.map_point(id) else {
+            continue;
+        };
+        index.push(i);
+        clusters.push(map_point_cluster(map, id, camera));
+        positions.push(mp.position);
+    }
+    let matches: Vec<McorMatch> = index
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| McorMatch {
+            cluster: &clusters[k],
+            map_point: positions[k],
+            point_camera: frame.features.unproject_camera(i, camera),
+        })
+        .collect();
+    let outcome = mcor_gate(params, &tcw.inverse(), &matches);
+    (index, outcome)
+}
+
+/// Outcome of one pose optimization of a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PoseOptCounts {
+    /// Matches that entered the optimization.
+    pub n_matches: usize,
+    /// Matches classified inlier at the final pose.
+    pub n_inliers: usize,
+    /// MC-OR: matches whose cluster failed the CL test at the last gating (before the last
+    /// round), 0 when MC-OR is off.
+    pub n_mcor_rejected_clusters: usize,
+    /// MC-OR: matches whose own feature failed the FL test at the last gating.
+    pub n_mcor_rejected_features: usize,
+}
+
+/// Optimizes `frame.tcw` (must be set) against its matched map points and sets
+/// `frame.outliers`. Returns the match / inlier counts. With fewer than 3 matches the pose is
+/// left unchanged (ORB-SLAM2 returns 0 inliers then).
+pub fn optimize_frame_pose(
+    frame: &mut TrackedFrame,
+    map: &Map,
+    camera: &Camera,
+    levels: &ScaleLevels,
+    cfg: &PoseOptConfig,
+    hooks: &NoiseHooks,
+) -> PoseOptCounts {
+    let Some(initial) = frame.tcw else {
+        return PoseOptCounts::default();
+    };
+    let mut obs = Vec::new();
+    let mut index = Vec::new();
+    let mut avc = Vec::new();
+    for i in 0..frame.len() {
+        let Some(mp) = frame.map_points[i].and_then(|id| map.map_point(id)) else {
+            continue;
+        };
+        frame.outliers[i] = false;
+        let estimate = (initial * Point3::from(mp.position)).coords;
+        let measurement = match avc_residual_for(camera, &frame.features, i, hooks, &estimate) {
+            Some(r) => {
+                avc.push((obs.len(), r.clone()));
+                Measurement::Custom(r)
+            }
+            None => measurement_for(camera, &frame.features, i, hooks, &estimate),
+        };
+        obs.push(PoseObservation {
+            point_world: mp.position,
+            measurement,
+            inv_sigma2: levels.inv_sigma2(frame.features.keypoints[i].octave),
+        });
+        index.push(i);
+    }
+    if obs.len() < 3 {
+        return PoseOptCounts {
+            n_matches: obs.len(),
+            ..PoseOptCounts::default()
+        };
+    }
+    // MC-OR clusters (keyframe poses are fixed during this call) and the current features.
+    let clusters: Vec<McorCluster> = match hooks.mcor {
+        Some(_) => index
+            .iter()
+            .map(|&i| map_point_cluster(map, frame.map_points[i].expect("matched"), camera))
+            .collect(),
+        None => Vec::new(),
+    };
+    let current: Vec<Option<Vector3<f64>>> = index
+        .iter()
+        .map(|&i| frame.features.unproject_camera(i, camera))
+        .collect();
+    let mut last_gate = (0, 0);
+    // Hook point 2, before every round with the latest pose: re-aim the virtual cameras, then
+    // re-run MC-OR (an observation rejected at a poor early pose may come back).
+    let mut gate = |_round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
+        for (k, r) in &avc {
+            r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
+        }
+        if let Some(params) = hooks.mcor {
+            let matches: Vec<McorMatch> = clusters
+                .iter()
+                .zip(&obs)
+                .zip(&current)
+                .map(|((c, o), p)| McorMatch {
+                    cluster: c,
+                    map_point: o.point_world,
+                    point_camera: *p,
+                })
+                .collect();
+            let outcome = mcor_gate(params, &pose.inverse(), &matches);
+            for (k, e) in excluded.iter_mut().enumerate() {
+                *e = !outcome.kept(k);
+            }
+            last_gate = (outcome.n_rejected_clusters, outcome.n_rejected_features);
+        }
+    };
+    let result = pose_optimization_with(camera, &initial, &obs, cfg, &mut gate);
+    frame.tcw = Some(renormalized(&result.pose));
+    for (k, &i) in index.iter().enumerate() {
+        frame.outliers[i] = !result.inliers[k];
+    }
+    PoseOptCounts {
+        n_matches: obs.len(),
+        n_inliers: result.n_inliers,
+        n_mcor_rejected_clusters: last_gate.0,
+        n_mcor_rejected_features: last_gate.1,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::feature::KeyPoint;
+    use crate::techniques::McorVerdict;
+    use nalgebra::{Translation3, UnitQuaternion};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Camera-to-world pose of camera `k`: 10 cm steps along x, looking along +z.
+    fn twc(k: usize) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(0.1 * k as f64, 0.0, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.02 * k as f64, 0.0),
+        )
+    }
+
+    /// Features of `points` (world) seen from `twc`, with `depth_error(k)` metres added to the
+    /// depth of point `k` and `pixel_noise` px of uniform keypoint noise.
+    fn features(
+        camera: &Camera,
+        points: &[Vector3<f64>],
+        twc: &Isometry3<f64>,
+        depth_error: impl Fn(usize) -> f64,
+        pixel_noise: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> Arc<Features> {
+        let (mut kps, mut depth, mut ur) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, pw) in points.iter().enumerate() {
+            let p = twc.inverse_transform_point(&Point3::from(*pw)).coords;
+            let uv = camera.project(&p);
+            let (u, v) = (
+                uv.x + rng.random_range(-pixel_noise..=pixel_noise),
+                uv.y + rng.random_range(-pixel_noise..=pixel_noise),
+            );
+            let z = p.z + depth_error(k);
+            kps.push(KeyPoint {
+                x: u as f32,
+                y: v as f32,
+                octave: 0,
+                angle: 0.0,
+                response: 1.0,
+            });
+            depth.push(z as f32);
+            ur.push((u - camera.bf / z) as f32);
+        }
+        let n = points.len();
+        Arc::new(Features::new(
+            kps,
+            (0..n).map(|i| [i as u64, 0, 0, 0]).collect(),
+            depth,
+            ur,
+            camera,
+        ))
+    }
+
+    /// A map of 3 keyframes observing 120 points, and the current frame (camera 3) matched to
+    /// all of them; points `gross` have a depth reading 1.5 m too far in the current frame.
+    fn scene(gross: &[usize]) -> (Camera, Map, TrackedFrame, Vec<Vector3<f64>>) {
+        let camera = Camera::tum_fr3();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let points: Vec<Vector3<f64>> = (0..120)
+            .map(|_| {
+                let p = camera.unproject(
+                    rng.random_range(40.0..600.0),
+                    rng.random_range(40.0..440.0),
+                    rng.random_range(1.5..4.0),
+                );
+                twc(1) * p
+            })
+            .collect();
+        let mut map = Map::new();
+        let kfs: Vec<_> = (0..3)
+            .map(|k| {
+                let f = features(&camera, &points, &twc(k), |_| 0.0, 0.3, &mut rng);
+                map.create_keyframe(k as u64, k as f64, twc(k).inverse(), f)
+            })
+            .collect();
+        for (i, p) in points.iter().enumerate() {
+            let mp = map.create_map_point(*p, [i as u64, 0, 0, 0], kfs[0]);
+            for &kf in &kfs {
+                map.add_observation(mp, kf, i);
+            }
+        }
+        let gross = gross.to_vec();
+        let f = features(
+            &camera,
+            &points,
+            &twc(3),
+            |k| if gross.contains(&k) { 1.5 } else { 0.0 },
+            0.3,
+            &mut rng,
+        );
+        let mut frame = TrackedFrame::new(3, 3.0, f);
+        for i in 0..points.len() {
+            frame.map_points[i] = map.map_points().nth(i).map(|m| m.id);
+        }
+        (camera, map, frame, points)
+    }
+
+    fn start_pose() -> Isometry3<f64> {
+        (Isometry3::translation(0.02, -0.01, 0.015) * twc(3)).inverse()
+    }
+
+    fn error_m(tcw: &Isometry3<f64>) -> f64 {
+        (tcw.inverse().translation.vector - twc(3).translation.vector).norm()
+    }
+
+    #[test]
+    fn mcor_rejects_gross_depth_features_before_optimization() {
+        let gross = [3, 17, 40, 77, 101];
+        let (camera, map, mut frame, _) = scene(&gross);
+        frame.tcw = Some(start_pose());
+        let params = McorParams::default();
+        let hooks = NoiseHooks {
+            mcor: Some(&params),
+            avc: None,
+        };
+        let levels = ScaleLevels::new(8, 1.2);
+        let counts = optimize_frame_pose(
+            &mut frame,
+            &map,
+            &camera,
+            &levels,
+            &PoseOptConfig::default(),
+            &hooks,
+        );
+        assert_eq!(counts.n_matches, 120);
+        assert_eq!(counts.n_mcor_rejected_clusters, 0);
+        assert_eq!(counts.n_mcor_rejected_features, gross.len());
+        for &g in &gross {
+            assert!(frame.outliers[g], "gross feature {g} must be an outlier");
+        }
+        assert!(counts.n_inliers >= 110, "{counts:?}");
+        assert!(error_m(&frame.tcw.unwrap()) < 0.005);
+        // The analysis helper reproduces the gate at the final pose.
+        let (index, outcome) = mcor_frame_gate(&frame, &map, &camera, &params, &frame.tcw.unwrap());
+        assert_eq!(index.len(), 120);
+        for &g in &gross {
+            assert_eq!(outcome.verdicts[g], McorVerdict::RejectedFeature);
+        }
+        assert_eq!(outcome.n_rejected_features, gross.len());
+    }
+
+    #[test]
+    fn mcor_rejects_the_cluster_of_a_drifted_map_point() {
+        let (camera, mut map, frame, _) = scene(&[]);
+        let id = frame.map_points[10].unwrap();
+        map.map_point_mut(id).unwrap().position += Vector3::new(0.0, 0.6, 0.0);
+        let (_, outcome) = mcor_frame_gate(
+            &frame,
+            &map,
+            &camera,
+            &McorParams::default(),
+            &twc(3).inverse(),
+        );
+        assert_eq!(outcome.verdicts[10], McorVerdict::RejectedCluster);
+        assert_eq!(
+            (outcome.n_rejected_clusters, outcome.n_rejected_features),
+            (1, 0)
+        );
+        // A cluster holds one feature per observing keyframe with depth.
+        let cluster = map_point_cluster(&map, frame.map_points[0].unwrap(), &camera);
+        assert_eq!(cluster.len(), 3);
+    }
+
+    #[test]
+    fn avc_builds_four_dof_residuals_and_recovers_the_pose() {
+        let (camera, map, mut frame, points) = scene(&[]);
+        frame.tcw = Some(start_pose());
+        let avc = AvcParams::default();
+        let hooks = NoiseHooks {
+            mcor: None,
+            avc: Some(&avc),
+        };
+        let estimate = (start_pose() * Point3::from(points[0])).coords;
+        let m = measurement_for(&camera, &frame.features, 0, &hooks, &estimate);
+        assert_eq!(m.dof(), 4);
+        let base = measurement_for(
+            &camera,
+            &frame.features,
+            0,
+            &NoiseHooks::default(),
+            &estimate,
+        );
+        assert_eq!(base.dof(), 3);
+        let levels = ScaleLevels::new(8, 1.2);
+        let counts = optimize_frame_pose(
+            &mut frame,
+            &map,
+            &camera,
+            &levels,
+            &PoseOptConfig::default(),
+            &hooks,
+        );
+        assert!(counts.n_inliers >= 115, "{counts:?}");
+        assert!(error_m(&frame.tcw.unwrap()) < 0.005);
+    }
+}

@@ -1,0 +1,969 @@
+//! Local bundle adjustment (ORB-SLAM2's `Optimizer::LocalBundleAdjustment`): a window of
+//! keyframe poses and the map points they see are refined jointly; keyframes outside the window
+//! that also see those points constrain them with fixed poses.
+//!
+//! Sparse Levenberg-Marquardt: each point's 3x3 block is eliminated (Schur complement), the
+//! reduced camera system (6 x 6 blocks, one per free keyframe) is solved by dense Cholesky, and
+//! the point steps are recovered by back-substitution. Two passes as in ORB-SLAM2: a robust pass
+//! (Huber, `first_pass_iterations`), then observations above their chi2 gate or behind their
+//! camera are excluded and the kernels dropped for `second_pass_iterations` more.
+
+use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, Matrix6x3, Vector3};
+
+use super::lm::{levenberg_marquardt, LmProblem};
+use super::residual::{linearize_observation, observation_chi2, Measurement};
+use super::robust::{kernel_cost, kernel_weight};
+use crate::geometry::{d_point_d_left_perturbation, exp_se3, Vector6};
+use crate::Camera;
+
+/// A keyframe pose of the problem.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BaKeyFrame {
+    /// `Tcw` (world to camera); updated in place unless `fixed`.
+    pub tcw: Isometry3<f64>,
+    /// Held constant: a keyframe outside the local window (or the map's first keyframe).
+    pub fixed: bool,
+}
+
+/// A map point of the problem.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BaPoint {
+    /// World position (metres); updated in place.
+    pub position: Vector3<f64>,
+}
+
+/// One keypoint of one keyframe measuring one map point.
+#[derive(Clone, Debug)]
+pub struct BaObservation {
+    /// Index into [`BaProblem::keyframes`].
+    pub keyframe: usize,
+    /// Index into [`BaProblem::points`].
+    pub point: usize,
+    /// What the keypoint measured.
+    pub measurement: Measurement,
+    /// Information weight `1 / sigma^2` of the keypoint's octave.
+    pub inv_sigma2: f64,
+}
+
+/// A local bundle-adjustment problem; poses and points are refined in place.
+#[derive(Clone, Debug, Default)]
+pub struct BaProblem {
+    /// Keyframe poses, free or fixed.
+    pub keyframes: Vec<BaKeyFrame>,
+    /// Map points (all free).
+    pub points: Vec<BaPoint>,
+    /// Observations linking them.
+    pub observations: Vec<BaObservation>,
+}
+
+/// Iteration budget of the two passes (ORB-SLAM2: 5 and 10).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BaConfig {
+    /// LM iterations of the robust first pass (default 5).
+    pub first_pass_iterations: usize,
+    /// LM iterations of the second pass, without kernels or outliers (default 10).
+    pub second_pass_iterations: usize,
+}
+
+impl Default for BaConfig {
+    fn default() -> Self {
+        BaConfig {
+            first_pass_iterations: 5,
+            second_pass_iterations: 10,
+        }
+    }
+}
+
+/// What [`local_bundle_adjustment`] did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BaReport {
+    /// Per observation: erase it from the map. True for observations excluded after the first
+    /// pass (as in ORB-SLAM2, whose excluded edges keep their above-gate chi2) and for those
+    /// above their gate or behind their camera at the final estimate.
+    pub outliers: Vec<bool>,
+    /// Sum of raw chi2 over the final inliers at the initial estimate (comparable with
+    /// `final_cost`; an inlier that started behind its camera contributes nothing).
+    pub initial_cost: f64,
+    /// Sum of raw chi2 over the final inliers at the final estimate.
+    pub final_cost: f64,
+    /// LM iterations run over both passes.
+    pub iterations: usize,
+    /// Per pass, the LM objective before its first iteration and after every accepted step
+    /// (Huber-robustified in the first pass); strictly decreasing within a pass.
+    pub pass_costs: Vec<Vec<f64>>,
+}
+
+/// Damping floor of a point block relative to its largest diagonal entry: keeps a point seen
+/// once by a monocular keypoint (rank-2 block) solvable once LM's lambda has decayed.
+const POINT_DAMPING: f64 = 1e-6;
+/// Absolute damping floor of a point block (a point with no constraint at all).
+const POINT_DAMPING_MIN: f64 = 1e-12;
+
+/// Refines the free keyframe poses and all points of `problem` in place and reports the
+/// observations to erase. See the module documentation for the algorithm.
+///
+/// # Panics
+/// When an observation refers to a keyframe or point index outside the problem (a caller bug).
+pub fn local_bundle_adjustment(
+    camera: &Camera,
+    problem: &mut BaProblem,
+    cfg: &BaConfig,
+) -> BaReport {
+    for (i, o) in problem.observations.iter().enumerate() {
+        assert!(
+            o.keyframe < problem.keyframes.len() && o.point < problem.points.len(),
+            "BA observation {i} refers to keyframe {} / point {} outside the problem ({} / {})",
+            o.keyframe,
+            o.point,
+            problem.keyframes.len(),
+            problem.points.len()
+        );
+    }
+    let initial_chi2 = all_chi2(camera, problem);
+    let mut solver = BaSolver::new(camera, problem);
+
+    let pass1: Vec<bool> = initial_chi2.iter().map(Option::is_some).collect();
+    solver.set_active(&pass1, true);
+    let s1 = levenberg_marquardt(&mut solver, cfg.first_pass_iterations);
+
+    let excluded: Vec<bool> = solver
+        .chi2_all()
+        .iter()
+        .zip(&problem.observations)
+        .map(|(c, o)| !c.is_some_and(|c| c <= o.measurement.chi2_threshold()))
+        .collect();
+    let pass2: Vec<bool> = excluded.iter().map(|e| !e).collect();
+    solver.set_active(&pass2, false);
+    let s2 = levenberg_marquardt(&mut solver, cfg.second_pass_iterations);
+
+    let final_chi2 = solver.chi2_all();
+    let (poses, points) = (solver.poses, solver.points);
+    for (kf, pose) in problem.keyframes.iter_mut().zip(poses) {
+        if !kf.fixed {
+            kf.tcw = pose;
+        }
+    }
+    for (p, x) in problem.points.iter_mut().zip(points) {
+        p.position = x;
+    }
+    let outliers: Vec<bool> = problem
+        .observations
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            excluded[i] || !final_chi2[i].is_some_and(|c| c <= o.measurement.chi2_threshold())
+        })
+        .collect();
+    let inlier_sum = |chi2: &[Option<f64>]| -> f64 {
+        chi2.iter()
+            .zip(&outliers)
+            .filter(|(_, &out)| !out)
+            .filter_map(|(c, _)| *c)
+            .sum()
+    };
+    BaReport {
+        initial_cost: inlier_sum(&initial_chi2),
+        final_cost: inlier_sum(&final_chi2),
+        outliers,
+        iterations: s1.iterations + s2.iterations,
+        pass_costs: vec![s1.costs, s2.costs],
+    }
+}
+
+/// Raw chi2 of every observation of `problem` at its current estimate.
+fn all_chi2(camera: &Camera, problem: &BaProblem) -> Vec<Option<f64>> {
+    problem
+        .observations
+        .iter()
+        .map(|o| {
+            let p_c = problem.keyframes[o.keyframe].tcw
+                * nalgebra::Point3::from(problem.points[o.point].position);
+            observation_chi2(camera, &o.measurement, o.inv_sigma2, &p_c.coords)
+        })
+        .collect()
+}
+
+/// A pose as a rotation matrix and a translation, for fast point transforms.
+#[derive(Clone, Copy)]
+struct RigidMatrix {
+    r: Matrix3<f64>,
+    t: Vector3<f64>,
+}
+
+impl RigidMatrix {
+    fn from_isometry(iso: &Isometry3<f64>) -> Self {
+        RigidMatrix {
+            r: iso.rotation.to_rotation_matrix().into_inner(),
+            t: iso.translation.vector,
+        }
+    }
+
+    fn transform(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.r * p + self.t
+    }
+}
+
+/// The sparse LM problem: current and trial estimates, active observations grouped by point,
+/// and the blocks of the normal equations.
+struct BaSolver<'a> {
+    camera: &'a Camera,
+    obs: &'a [BaObservation],
+    /// Keyframe index -> index of its 6-DoF block in the reduced camera system, `None` if fixed.
+    kf_var: Vec<Option<usize>>,
+    n_var: usize,
+    robust: bool,
+    /// Active observations grouped by point: those of point `j` are
+    /// `point_obs[point_start[j]..point_start[j + 1]]`.
+    point_start: Vec<usize>,
+    point_obs: Vec<usize>,
+    poses: Vec<Isometry3<f64>>,
+    points: Vec<Vector3<f64>>,
+    trial_poses: Vec<Isometry3<f64>>,
+    trial_points: Vec<Vector3<f64>>,
+    cost: f64,
+    trial_cost: f64,
+    /// Camera blocks `U_i` and right-hand sides `g_i` (per free keyframe).
+    u: Vec<Matrix6<f64>>,
+    gc: Vec<Vector6>,
+    /// Point blocks `V_j` and right-hand sides (per point).
+    v: Vec<Matrix3<f64>>,
+    gp: Vec<Vector3<f64>>,
+    /// Camera-point blocks `W` per entry of `point_obs` (zero for fixed keyframes).
+    w: Vec<Matrix6x3<f64>>,
+}
+
+impl<'a> BaSolver<'a> {
+    fn new(camera: &'a Camera, problem: &'a BaProblem) -> Self {
+        let mut n_var = 0;
+        let kf_var = problem
+            .keyframes
+            .iter()
+            .map(|kf| {
+                (!kf.fixed).then(|| {
+                    n_var += 1;
+                    n_var - 1
+                })
+            })
+            .collect();
+        let poses: Vec<Isometry3<f64>> = problem.keyframes.iter().map(|k| k.tcw).collect();
+        let points: Vec<Vector3<f64>> = problem.points.iter().map(|p| p.position).collect();
+        BaSolver {
+            camera,
+            obs: &problem.observations,
+            kf_var,
+            n_var,
+            robust: false,
+            point_start: vec![0; points.len() + 1],
+            point_obs: Vec::new(),
+            trial_poses: poses.clone(),
+            trial_points: points.clone(),
+            poses,
+            cost: 0.0,
+            trial_cost: f64::INFINITY,
+            u: vec![Matrix6::zeros(); n_var],
+            gc: vec![Vector6::zeros(); n_var],
+            v: vec![Matrix3::zeros(); points.len()],
+            gp: vec![Vector3::zeros(); points.len()],
+            w: Vec::new(),
+            points,
+        }
+    }
+
+    /// Selects the observations of the next pass (which must be valid at the current estimate)
+    /// and whether they carry the Huber kernel.
+    fn set_active(&mut self, active: &[bool], robust: bool) {
+        self.robust = robust;
+        let n_points = self.points.len();
+        let mut counts = vec![0usize; n_points + 1];
+        for (o, _) in self.obs.iter().zip(active).filter(|(_, &a)| a) {
+            counts[o.point + 1] += 1;
+        }
+        for j in 0..n_points {
+            counts[j + 1] += counts[j];
+        }
+        self.point_start = counts.clone();
+        self.point_obs = vec![0; counts[n_points]];
+        let mut fill = counts;
+        for (i, o) in self.obs.iter().enumerate() {
+            if active[i] {
+                self.point_obs[fill[o.point]] = i;
+                fill[o.point] += 1;
+            }
+        }
+        self.w = vec![Matrix6x3::zeros(); self.point_obs.len()];
+        self.cost = self
+            .cost_at(&self.poses, &self.points)
+            .unwrap_or(f64::INFINITY);
+    }
+
+    /// Raw chi2 of every observation (active or not) at the current estimate.
+    fn chi2_all(&self) -> Vec<Option<f64>> {
+        self.obs
+            .iter()
+            .map(|o| {
+                let p_c = self.poses[o.keyframe] * nalgebra::Point3::from(self.points[o.point]);
+                observation_chi2(self.camera, &o.measurement, o.inv_sigma2, &p_c.coords)
+            })
+            .collect()
+    }
+
+    /// The pass objective at an estimate; `None` if an active observation is behind its camera.
+    fn cost_at(&self, poses: &[Isometry3<f64>], points: &[Vector3<f64>]) -> Option<f64> {
+        let rigid: Vec<RigidMatrix> = poses.iter().map(RigidMatrix::from_isometry).collect();
+        let mut cost = 0.0;
+        for &i in &self.point_obs {
+            let o = &self.obs[i];
+            let p_c = rigid[o.keyframe].transform(&points[o.point]);
+            let chi2 = observation_chi2(self.camera, &o.measurement, o.inv_sigma2, &p_c)?;
+            cost += kernel_cost(self.robust, o.measurement.huber_delta(), chi2);
+        }
+        Some(cost)
+    }
+}
+
+impl LmProblem for BaSolver<'_> {
+    fn cost(&self) -> f64 {
+        self.cost
+    }
+
+    fn linearize(&mut self) -> Option<f64> {
+        if self.point_obs.is_empty() {
+            return None;
+        }
+        let rigid: Vec<RigidMatrix> = self.poses.iter().map(RigidMatrix::from_isometry).collect();
+        self.u.iter_mut().for_each(|m| *m = Matrix6::zeros());
+        self.gc.iter_mut().for_each(|g| *g = Vector6::zeros());
+        for j in 0..self.points.len() {
+            let mut v = Matrix3::zeros();
+            let mut gp = Vector3::zeros();
+            for k in self.point_start[j]..self.point_start[j + 1] {
+                let o = &self.obs[self.point_obs[k]];
+                let pose = &rigid[o.keyframe];
+                let p_c = pose.transform(&self.points[j]);
+                let (robust, delta) = (self.robust, o.measurement.huber_delta());
+                let Some(lin) =
+                    linearize_observation(self.camera, &o.measurement, o.inv_sigma2, &p_c, |c| {
+                        kernel_weight(robust, delta, c)
+                    })
+                else {
+                    self.w[k] = Matrix6x3::zeros();
+                    continue;
+                };
+                let rt = pose.r.transpose();
+                let m_r = lin.jtj * pose.r;
+                v += rt * m_r;
+                gp -= rt * lin.jtr;
+                if let Some(var) = self.kf_var[o.keyframe] {
+                    let a = d_point_d_left_perturbation(&p_c);
+                    let at: Matrix6x3<f64> = a.transpose();
+                    self.u[var] += at * (lin.jtj * a);
+                    self.gc[var] -= at * lin.jtr;
+                    self.w[k] = at * m_r;
+                } else {
+                    self.w[k] = Matrix6x3::zeros();
+                }
+            }
+            self.v[j] = v;
+            self.gp[j] = gp;
+        }
+        let cam_max = self
+            .u
+            .iter()
+            .flat_map(|m| (0..6).map(move |d| m[(d, d)]))
+            .fold(0.0, f64::max);
+        let point_max = self
+            .v
+            .iter()
+            .flat_map(|m| (0..3).map(move |d| m[(d, d)]))
+            .fold(0.0, f64::max);
+        Some(cam_max.max(point_max))
+    }
+
+    fn solve(&mut self, lambda: f64) -> Option<f64> {
+        let n = self.n_var;
+        let n_points = self.points.len();
+        let mut s = DMatrix::<f64>::zeros(6 * n, 6 * n);
+        let mut rhs = DVector::<f64>::zeros(6 * n);
+        for i in 0..n {
+            let block = self.u[i] + Matrix6::identity() * lambda;
+            s.fixed_view_mut::<6, 6>(6 * i, 6 * i).copy_from(&block);
+            rhs.fixed_rows_mut::<6>(6 * i).copy_from(&self.gc[i]);
+        }
+        // Eliminate every point: S -= W V^-1 W^T, rhs -= W V^-1 g_p.
+        let mut v_inv = vec![Matrix3::zeros(); n_points];
+        let mut damping = vec![0.0; n_points];
+        let mut y = vec![Matrix6x3::zeros(); self.point_obs.len()];
+        for j in 0..n_points {
+            let range = self.point_start[j]..self.point_start[j + 1];
+            if range.is_empty() {
+                continue;
+            }
+            let vj = &self.v[j];
+            let max_diag = vj[(0, 0)].max(vj[(1, 1)]).max(vj[(2, 2)]);
+            damping[j] = lambda + POINT_DAMPING * max_diag + POINT_DAMPING_MIN;
+            let inv = (vj + Matrix3::identity() * damping[j])
+                .cholesky()?
+                .inverse();
+            v_inv[j] = inv;
+            for a in range.clone() {
+                let Some(ia) = self.kf_var[self.obs[self.point_obs[a]].keyframe] else {
+                    continue;
+                };
+                y[a] = self.w[a] * inv;
+                let r = y[a] * self.gp[j];
+                let mut seg = rhs.fixed_rows_mut::<6>(6 * ia);
+                seg -= r;
+                for b in a..range.end {
+                    let Some(ib) = self.kf_var[self.obs[self.point_obs[b]].keyframe] else {
+                        continue;
+                    };
+                    let blk: Matrix6<f64> = y[a] * self.w[b].transpose();
+                    if ia == ib {
+                        let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ia);
+                        if a == b {
+                            view -= blk;
+                        } else {
+                            view -= blk + blk.transpose();
+                        }
+                    } else {
+                        let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ib);
+                        view -= blk;
+                        let mut view = s.fixed_view_mut::<6, 6>(6 * ib, 6 * ia);
+                        view -= blk.transpose();
+                    }
+                }
+            }
+        }
+        let dc = if n > 0 {
+            s.cholesky()?.solve(&rhs)
+        } else {
+            DVector::zeros(0)
+        };
+        if !dc.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        let mut predicted = 0.0;
+        for (i, kf_var) in self.kf_var.iter().enumerate() {
+            self.trial_poses[i] = match kf_var {
+                Some(var) => {
+                    let d: Vector6 = dc.fixed_rows::<6>(6 * var).into_owned();
+                    predicted += d.dot(&(d * lambda + self.gc[*var]));
+                    exp_se3(&d) * self.poses[i]
+                }
+                None => self.poses[i],
+            };
+        }
+        for j in 0..n_points {
+            let range = self.point_start[j]..self.point_start[j + 1];
+            if range.is_empty() {
+                self.trial_points[j] = self.points[j];
+                continue;
+            }
+            let mut r = self.gp[j];
+            for k in range {
+                if let Some(var) = self.kf_var[self.obs[self.point_obs[k]].keyframe] {
+                    r -= self.w[k].transpose() * dc.fixed_rows::<6>(6 * var);
+                }
+            }
+            let dp = v_inv[j] * r;
+            if !dp.iter().all(|x| x.is_finite()) {
+                return None;
+            }
+            predicted += dp.dot(&(dp * damping[j] + self.gp[j]));
+            self.trial_points[j] = self.points[j] + dp;
+        }
+        Some(predicted)
+    }
+
+    fn trial_cost(&mut self) -> Option<f64> {
+        self.trial_cost = self.cost_at(&self.trial_poses, &self.trial_points)?;
+        Some(self.trial_cost)
+    }
+
+    fn accept(&mut self) {
+        std::mem::swap(&mut self.poses, &mut self.trial_poses);
+        std::mem::swap(&mut self.points, &mut self.trial_points);
+        self.cost = self.trial_cost;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optimize::numdiff::assert_jacobian;
+    use crate::optimize::test_scene::{
+        self, cloud, gaussian, gross_outlier, observe, perturb, pose_error, trajectory,
+    };
+    use nalgebra::{DMatrix, Point3};
+    use rand::Rng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// Ground truth plus a noisy copy to optimize.
+    struct Synthetic {
+        camera: Camera,
+        gt_poses: Vec<Isometry3<f64>>,
+        gt_points: Vec<Vector3<f64>>,
+        problem: BaProblem,
+        gross: Vec<bool>,
+    }
+
+    /// `n_kf` keyframes (the first `n_fixed` fixed) seeing `n_points` points; every visible pair
+    /// becomes an observation (60 % stereo) with `pixel_noise` x octave-sigma noise, a fraction
+    /// `gross_rate` of them mismatches. Free poses start `pose_noise` (m, rad) off, points
+    /// `point_noise` metres off.
+    #[allow(clippy::too_many_arguments)]
+    fn synthetic(
+        n_kf: usize,
+        n_fixed: usize,
+        n_points: usize,
+        pixel_noise: f64,
+        gross_rate: f64,
+        pose_noise: (f64, f64),
+        point_noise: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> Synthetic {
+        let camera = Camera::tum_fr3();
+        let gt_poses = trajectory(n_kf, rng);
+        let gt_points = cloud(n_points, rng);
+        let mut observations = Vec::new();
+        let mut gross = Vec::new();
+        for (j, pw) in gt_points.iter().enumerate() {
+            for (k, tcw) in gt_poses.iter().enumerate() {
+                let stereo = rng.random_bool(0.6);
+                let octave = rng.random_range(0..3);
+                let Some((mut measurement, inv_sigma2)) =
+                    observe(&camera, tcw, pw, octave, stereo, pixel_noise, rng)
+                else {
+                    continue;
+                };
+                let is_gross = rng.random_bool(gross_rate);
+                if is_gross {
+                    measurement = gross_outlier(&camera, tcw, pw, stereo, rng);
+                }
+                observations.push(BaObservation {
+                    keyframe: k,
+                    point: j,
+                    measurement,
+                    inv_sigma2,
+                });
+                gross.push(is_gross);
+            }
+        }
+        let keyframes = gt_poses
+            .iter()
+            .enumerate()
+            .map(|(k, t)| BaKeyFrame {
+                tcw: if k < n_fixed {
+                    *t
+                } else {
+                    perturb(t, pose_noise.0, pose_noise.1, rng)
+                },
+                fixed: k < n_fixed,
+            })
+            .collect();
+        let points = gt_points
+            .iter()
+            .map(|p| BaPoint {
+                position: p + test_scene::unit_vector(rng) * point_noise * gaussian(rng).abs(),
+            })
+            .collect();
+        Synthetic {
+            camera,
+            gt_poses,
+            gt_points,
+            problem: BaProblem {
+                keyframes,
+                points,
+                observations,
+            },
+            gross,
+        }
+    }
+
+    fn assert_monotone(report: &BaReport) {
+        assert_eq!(report.pass_costs.len(), 2);
+        for (pass, costs) in report.pass_costs.iter().enumerate() {
+            assert!(
+                costs.iter().all(|c| c.is_finite()),
+                "pass {pass}: {costs:?}"
+            );
+            assert!(
+                costs.windows(2).all(|w| w[1] < w[0]),
+                "pass {pass} not monotone: {costs:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn pose_and_point_jacobians_match_central_differences() {
+        let mut rng = test_scene::rng(20);
+        let s = synthetic(3, 0, 20, 1.0, 0.0, (0.02, 0.01), 0.05, &mut rng);
+        for o in s.problem.observations.iter().take(40) {
+            let tcw = s.problem.keyframes[o.keyframe].tcw;
+            let pw = s.problem.points[o.point].position;
+            let p_c = (tcw * Point3::from(pw)).coords;
+            let block = o.measurement.evaluate(&s.camera, &p_c).unwrap();
+            let r = tcw.rotation.to_rotation_matrix().into_inner();
+            let mut analytic = DMatrix::zeros(4, 9);
+            analytic
+                .view_mut((0, 0), (4, 6))
+                .copy_from(&(block.d_residual_d_point * d_point_d_left_perturbation(&p_c)));
+            analytic
+                .view_mut((0, 6), (4, 3))
+                .copy_from(&(block.d_residual_d_point * r));
+            let f = |x: &DVector<f64>| {
+                let xi = Vector6::from_column_slice(&x.as_slice()[..6]);
+                let dp = Vector3::from_column_slice(&x.as_slice()[6..]);
+                let q = (exp_se3(&xi) * tcw * Point3::from(pw + dp)).coords;
+                DVector::from_column_slice(
+                    o.measurement
+                        .evaluate(&s.camera, &q)
+                        .unwrap()
+                        .residual
+                        .as_slice(),
+                )
+            };
+            assert_jacobian("BA residual", f, &DVector::zeros(9), &analytic);
+        }
+    }
+
+    #[test]
+    fn normal_equations_are_half_the_cost_gradient() {
+        // The assembled right-hand side (cameras and points) is -1/2 the gradient of the pass
+        // objective: this checks the whole chain from residual Jacobians to the blocks.
+        let mut rng = test_scene::rng(21);
+        let s = synthetic(3, 1, 15, 1.0, 0.1, (0.02, 0.01), 0.05, &mut rng);
+        for robust in [true, false] {
+            let mut solver = BaSolver::new(&s.camera, &s.problem);
+            solver.set_active(&vec![true; s.problem.observations.len()], robust);
+            solver.linearize().unwrap();
+            let n_free = solver.n_var;
+            let n = 6 * n_free + 3 * s.problem.points.len();
+            let mut analytic = DMatrix::zeros(1, n);
+            for i in 0..n_free {
+                for d in 0..6 {
+                    analytic[(0, 6 * i + d)] = solver.gc[i][d];
+                }
+            }
+            for j in 0..s.problem.points.len() {
+                for d in 0..3 {
+                    analytic[(0, 6 * n_free + 3 * j + d)] = solver.gp[j][d];
+                }
+            }
+            let f = |x: &DVector<f64>| {
+                let poses: Vec<Isometry3<f64>> = solver
+                    .poses
+                    .iter()
+                    .enumerate()
+                    .map(|(k, t)| match solver.kf_var[k] {
+                        Some(v) => {
+                            exp_se3(&Vector6::from_column_slice(&x.as_slice()[6 * v..6 * v + 6]))
+                                * t
+                        }
+                        None => *t,
+                    })
+                    .collect();
+                let points: Vec<Vector3<f64>> = solver
+                    .points
+                    .iter()
+                    .enumerate()
+                    .map(|(j, p)| {
+                        p + Vector3::from_column_slice(&x.as_slice()[6 * n_free + 3 * j..][..3])
+                    })
+                    .collect();
+                DVector::from_element(1, -0.5 * solver.cost_at(&poses, &points).unwrap())
+            };
+            assert_jacobian(
+                &format!("robust {robust}"),
+                f,
+                &DVector::zeros(n),
+                &analytic,
+            );
+        }
+    }
+
+    #[test]
+    fn converges_to_ground_truth_with_monotone_cost() {
+        // 10 keyframes (the first fixed), 1000 points, 1 px noise (x octave scale), 1 %
+        // mismatches; poses start 5 cm / 2 deg off, points ~25 cm off.
+        let mut rng = test_scene::rng(22);
+        let mut s = synthetic(
+            10,
+            1,
+            1000,
+            1.0,
+            0.01,
+            (0.05, 2f64.to_radians()),
+            0.3,
+            &mut rng,
+        );
+        let initial_points = s.problem.points.clone();
+        let n_obs = s.problem.observations.len();
+        assert!(n_obs > 5000, "{n_obs} observations");
+        let report = local_bundle_adjustment(&s.camera, &mut s.problem, &BaConfig::default());
+        assert_monotone(&report);
+        assert!(report.iterations <= 15);
+        assert!(report.final_cost < report.initial_cost);
+
+        // Within the noise: the optimum is at least as good as the truth on the inliers.
+        let mut gt = s.problem.clone();
+        for (kf, t) in gt.keyframes.iter_mut().zip(&s.gt_poses) {
+            kf.tcw = *t;
+        }
+        for (p, x) in gt.points.iter_mut().zip(&s.gt_points) {
+            p.position = *x;
+        }
+        let gt_chi2 = all_chi2(&s.camera, &gt);
+        let gt_cost: f64 = gt_chi2
+            .iter()
+            .zip(&report.outliers)
+            .filter(|(_, &o)| !o)
+            .map(|(c, _)| c.unwrap())
+            .sum();
+        assert!(
+            report.final_cost <= gt_cost,
+            "final {} vs truth {gt_cost}",
+            report.final_cost
+        );
+
+        for (kf, t) in s.problem.keyframes.iter().zip(&s.gt_poses) {
+            let (dt, dr) = pose_error(&kf.tcw, t);
+            // 5 cm / 2 deg at the start; over seeds 1..10 the worst keyframe ends at 1.0 cm /
+            // 0.11 deg, the noise floor of this scene (points at 2-6 m, 1 m of baseline).
+            assert!(dt < 0.02 && dr < 0.2, "keyframe error {dt} m {dr} deg");
+        }
+        // Points pinned down by at least two inlier observations (the others have no
+        // observable position and keep their start error).
+        let mut inlier_count = vec![0usize; s.gt_points.len()];
+        for (o, &out) in s.problem.observations.iter().zip(&report.outliers) {
+            inlier_count[o.point] += usize::from(!out);
+        }
+        let constrained: Vec<usize> = (0..s.gt_points.len())
+            .filter(|&j| inlier_count[j] >= 2)
+            .collect();
+        assert!(
+            constrained.len() > 900,
+            "{} constrained points",
+            constrained.len()
+        );
+        let rms = |points: &[BaPoint]| {
+            (constrained
+                .iter()
+                .map(|&j| (points[j].position - s.gt_points[j]).norm_squared())
+                .sum::<f64>()
+                / constrained.len() as f64)
+                .sqrt()
+        };
+        let (rms_before, rms_after) = (rms(&initial_points), rms(&s.problem.points));
+        assert!(
+            rms_after < 0.08 && rms_after < rms_before / 3.0,
+            "point RMS {rms_before} -> {rms_after} m"
+        );
+
+        let flagged = s
+            .gross
+            .iter()
+            .zip(&report.outliers)
+            .filter(|(&g, &o)| g && o)
+            .count();
+        let n_gross = s.gross.iter().filter(|&&g| g).count();
+        assert_eq!(flagged, n_gross, "every mismatch must be flagged");
+        let false_alarms = report.outliers.iter().filter(|&&o| o).count() - flagged;
+        assert!(
+            false_alarms < n_obs / 10,
+            "{false_alarms} good observations flagged"
+        );
+    }
+
+    #[test]
+    fn one_keyframe_window_converges() {
+        let mut rng = test_scene::rng(23);
+        let mut s = synthetic(4, 0, 300, 1.0, 0.0, (0.0, 0.0), 0.03, &mut rng);
+        for (k, kf) in s.problem.keyframes.iter_mut().enumerate() {
+            kf.fixed = k != 2;
+        }
+        s.problem.keyframes[2].tcw = perturb(&s.gt_poses[2], 0.05, 2f64.to_radians(), &mut rng);
+        let report = local_bundle_adjustment(&s.camera, &mut s.problem, &BaConfig::default());
+        assert_monotone(&report);
+        let (dt, dr) = pose_error(&s.problem.keyframes[2].tcw, &s.gt_poses[2]);
+        assert!(dt < 0.005 && dr < 0.1, "{dt} m {dr} deg");
+        for k in [0, 1, 3] {
+            assert_eq!(
+                s.problem.keyframes[k].tcw, s.gt_poses[k],
+                "fixed keyframes stay put"
+            );
+        }
+    }
+
+    #[test]
+    fn single_keyframe_problem_is_stable() {
+        // No fixed keyframe at all: the gauge is free and only LM damping holds it.
+        let mut rng = test_scene::rng(24);
+        let mut s = synthetic(1, 0, 200, 1.0, 0.0, (0.02, 0.01), 0.05, &mut rng);
+        let before = s.problem.keyframes[0].tcw;
+        let report = local_bundle_adjustment(&s.camera, &mut s.problem, &BaConfig::default());
+        assert_monotone(&report);
+        assert!(report.final_cost < report.initial_cost);
+        // Every point is free and seen once, so the pose is unobservable and the points absorb
+        // all residuals: the cost must collapse while the damping keeps the drift bounded.
+        assert!(report.final_cost < 1e-3 * report.initial_cost, "{report:?}");
+        let (dt, dr) = pose_error(&s.problem.keyframes[0].tcw, &before);
+        assert!(dt < 1.0 && dr < 10.0, "gauge drift {dt} m {dr} deg");
+        assert!(s
+            .problem
+            .points
+            .iter()
+            .all(|p| p.position.iter().all(|x| x.is_finite())));
+    }
+
+    #[test]
+    fn single_observation_points_are_stable() {
+        let mut rng = test_scene::rng(25);
+        let mut s = synthetic(5, 1, 200, 0.0, 0.0, (0.02, 0.01), 0.03, &mut rng);
+        // 40 extra points seen once: 20 by a monocular keypoint (rank-2 block), 20 by RGB-D.
+        let first_single = s.problem.points.len();
+        for i in 0..40 {
+            let k = 1 + i % 4;
+            let tcw = s.gt_poses[k];
+            let p_c = Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-0.8..0.8),
+                rng.random_range(2.0..5.0),
+            );
+            let pw = (tcw.inverse() * Point3::from(p_c)).coords;
+            let (measurement, inv_sigma2) =
+                observe(&s.camera, &tcw, &pw, 0, i % 2 == 1, 0.0, &mut rng).unwrap();
+            s.problem.points.push(BaPoint {
+                position: pw + test_scene::unit_vector(&mut rng) * 0.05,
+            });
+            s.gt_points.push(pw);
+            s.problem.observations.push(BaObservation {
+                keyframe: k,
+                point: first_single + i,
+                measurement,
+                inv_sigma2,
+            });
+        }
+        let initial: Vec<Vector3<f64>> = s.problem.points.iter().map(|p| p.position).collect();
+        let report = local_bundle_adjustment(&s.camera, &mut s.problem, &BaConfig::default());
+        assert_monotone(&report);
+        // Exact measurements: a point seen once with depth converges to the truth (slowly along
+        // the depth: LM's single lambda, as g2o's, is set by the much stiffer camera blocks);
+        // one seen once by a monocular keypoint only slides onto its ray. Both start 5 cm off.
+        let final_chi2 = all_chi2(&s.camera, &s.problem);
+        let n_obs = s.problem.observations.len();
+        for (i, j) in (first_single..s.problem.points.len()).enumerate() {
+            let p = s.problem.points[j].position;
+            assert!(p.iter().all(|x| x.is_finite()));
+            if i % 2 == 1 {
+                assert!(
+                    (p - s.gt_points[j]).norm() < 0.5 * (initial[j] - s.gt_points[j]).norm(),
+                    "point {j}: {} m off, start {} m off",
+                    (p - s.gt_points[j]).norm(),
+                    (initial[j] - s.gt_points[j]).norm()
+                );
+            } else {
+                let moved = (p - initial[j]).norm();
+                assert!(moved < 0.06, "point {j} moved {moved} m");
+            }
+            let obs = n_obs - (s.problem.points.len() - j);
+            assert!(
+                final_chi2[obs].is_some_and(|c| c < 1e-2),
+                "point {j}: {:?}",
+                final_chi2[obs]
+            );
+            assert!(!report.outliers[obs]);
+        }
+        for (kf, t) in s.problem.keyframes.iter().zip(&s.gt_poses) {
+            assert!(pose_error(&kf.tcw, t).0 < 0.01);
+        }
+    }
+
+    #[test]
+    fn points_behind_a_camera_are_outliers_and_harmless() {
+        let mut rng = test_scene::rng(26);
+        let mut s = synthetic(4, 1, 200, 0.0, 0.0, (0.01, 0.005), 0.02, &mut rng);
+        // Move point 0 behind keyframe 2 (its observations then cannot be evaluated there).
+        let behind = (s.problem.keyframes[2].tcw.inverse() * Point3::new(0.0, 0.0, -1.0)).coords;
+        s.problem.points.push(BaPoint { position: behind });
+        let j = s.problem.points.len() - 1;
+        for k in 0..4 {
+            s.problem.observations.push(BaObservation {
+                keyframe: k,
+                point: j,
+                measurement: Measurement::Mono { u: 320.0, v: 240.0 },
+                inv_sigma2: 1.0,
+            });
+        }
+        let report = local_bundle_adjustment(&s.camera, &mut s.problem, &BaConfig::default());
+        assert_monotone(&report);
+        let n = s.problem.observations.len();
+        assert!(
+            report.outliers[n - 2],
+            "the observation from behind is an outlier"
+        );
+        assert!(s
+            .problem
+            .points
+            .iter()
+            .all(|p| p.position.iter().all(|x| x.is_finite())));
+        for (kf, t) in s.problem.keyframes.iter().zip(&s.gt_poses) {
+            assert!(pose_error(&kf.tcw, t).0 < 0.01);
+        }
+    }
+
+    #[test]
+    fn points_seen_only_by_fixed_keyframes_are_triangulated() {
+        let mut rng = test_scene::rng(27);
+        let mut s = synthetic(5, 5, 100, 0.0, 0.0, (0.0, 0.0), 0.2, &mut rng);
+        let report = local_bundle_adjustment(&s.camera, &mut s.problem, &BaConfig::default());
+        assert_monotone(&report);
+        // Exact measurements: every point whose position is observable (two observations, or
+        // one with depth) lands on the truth; the others keep their start or slide along a ray.
+        let initial = synthetic(
+            5,
+            5,
+            100,
+            0.0,
+            0.0,
+            (0.0, 0.0),
+            0.2,
+            &mut test_scene::rng(27),
+        )
+        .problem;
+        let mut checked = 0;
+        for (j, (p, g)) in s.problem.points.iter().zip(&s.gt_points).enumerate() {
+            let obs: Vec<&BaObservation> = s
+                .problem
+                .observations
+                .iter()
+                .filter(|o| o.point == j)
+                .collect();
+            let observable = obs.len() >= 2 || obs.iter().any(|o| o.measurement.dof() == 3);
+            if observable {
+                assert!(
+                    (p.position - g).norm() < 1e-4,
+                    "point {j} off by {}",
+                    (p.position - g).norm()
+                );
+                checked += 1;
+            } else if obs.is_empty() {
+                assert_eq!(p.position, initial.points[j].position);
+            }
+        }
+        assert!(checked > 80, "{checked} observable points");
+        assert!(report.outliers.iter().all(|&o| !o));
+        for (kf, t) in s.problem.keyframes.iter().zip(&s.gt_poses) {
+            assert_eq!(kf.tcw, *t);
+        }
+    }
+
+    #[test]
+    fn empty_problem_is_a_no_op() {
+        let mut problem = BaProblem::default();
+        let report =
+            local_bundle_adjustment(&Camera::tum_fr3(), &mut problem, &BaConfig::default());
+        assert_eq!(report.iterations, 0);
+        assert!(report.outliers.is_empty());
+    }
+}

@@ -1,0 +1,309 @@
+//! Reprojection residuals as plain data: what was measured for one observation of a point, how
+//! to evaluate the residual and its Jacobian with respect to the point in camera coordinates, and
+//! the chi2 gates of their dimension.
+//!
+//! Every residual here is a function `r(p_c)` of the point in camera coordinates only; the
+//! solvers chain `d r / d p_c` to the pose (left perturbation, see [`crate::geometry`]) and to the
+//! world point themselves. That is the extension point for the paper's 4-D AVC residual
+//! (Eq. 12): implement [`CameraResidual`] and wrap it in [`Measurement::Custom`]; no solver
+//! changes. Residuals are stored in a fixed 4-vector whose rows past [`Measurement::dof`] are zero.
+
+use std::fmt;
+use std::sync::Arc;
+
+use nalgebra::{Matrix3, Matrix4x3, Vector3, Vector4};
+
+use crate::Camera;
+
+/// Largest residual dimension the solvers support (the AVC residual is 4-D).
+pub const MAX_RESIDUAL_DOF: usize = 4;
+
+/// Points with a camera-frame depth at or below this (metres) cannot be projected: their
+/// observation counts as an outlier (ORB-SLAM2's `isDepthPositive` test in bundle adjustment).
+pub const MIN_DEPTH: f64 = 1e-6;
+
+/// The 95 % quantile of the chi2 distribution for 1..=4 degrees of freedom
+/// (3.841, 5.991, 7.815, 9.488): ORB-SLAM2's inlier gates and squared Huber thresholds.
+pub fn chi2_95(dof: usize) -> f64 {
+    match dof {
+        1 => 3.841,
+        2 => 5.991,
+        3 => 7.815,
+        _ => 9.488,
+    }
+}
+
+/// A residual and its Jacobian with respect to the point in camera coordinates, padded to
+/// [`MAX_RESIDUAL_DOF`] rows. Rows at and past the residual's dof must be zero in both.
+/// Residuals are "predicted minus measured", in pixels for the built-in measurements.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ResidualBlock {
+    /// The residual vector (unused rows zero).
+    pub residual: Vector4<f64>,
+    /// `d residual / d p_c`, 4x3 (unused rows zero).
+    pub d_residual_d_point: Matrix4x3<f64>,
+}
+
+/// A user-defined residual of a point in camera coordinates, e.g. the paper's AVC residual.
+///
+/// The solvers weight it with the observation's scalar information `inv_sigma2` on every row
+/// (a residual whose rows have different variances can whiten them itself), gate it with
+/// [`chi2_95`] of its [`dof`](CameraResidual::dof) and robustify it with Huber at the square
+/// root of that gate. The solvers have already checked `p_c.z > MIN_DEPTH`.
+pub trait CameraResidual: Send + Sync + fmt::Debug {
+    /// Residual dimension, 1..=[`MAX_RESIDUAL_DOF`].
+    fn dof(&self) -> usize;
+    /// The residual and `d r / d p_c` at the camera-frame point `p_c`, or `None` when the
+    /// residual is undefined there (the observation then counts as an outlier).
+    fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock>;
+}
+
+/// What one keypoint measured of a map point.
+#[derive(Clone, Debug)]
+pub enum Measurement {
+    /// Monocular keypoint at undistorted pixel (u, v): a 2-D reprojection residual.
+    Mono {
+        /// Undistorted pixel column.
+        u: f64,
+        /// Undistorted pixel row.
+        v: f64,
+    },
+    /// Stereo or RGB-D keypoint: (u, v) plus the right-image column `ur = u - bf / z`
+    /// (for RGB-D the virtual right column from the measured depth; see [`Measurement::rgbd`]).
+    /// A 3-D residual, as ORB-SLAM2's stereo edges.
+    Stereo {
+        /// Undistorted pixel column.
+        u: f64,
+        /// Undistorted pixel row.
+        v: f64,
+        /// Column in the (real or virtual) right image.
+        ur: f64,
+    },
+    /// Any other residual of the camera-frame point (the AVC extension point).
+    Custom(Arc<dyn CameraResidual>),
+}
+
+impl Measurement {
+    /// An RGB-D keypoint at (u, v) with measured depth `depth` (metres, > 0): a
+    /// [`Measurement::Stereo`] with the virtual right column `ur = u - bf / depth`.
+    pub fn rgbd(camera: &Camera, u: f64, v: f64, depth: f64) -> Self {
+        Measurement::Stereo {
+            u,
+            v,
+            ur: u - camera.bf / depth,
+        }
+    }
+
+    /// Residual dimension: 2 (mono), 3 (stereo / RGB-D), or the custom residual's.
+    pub fn dof(&self) -> usize {
+        match self {
+            Measurement::Mono { .. } => 2,
+            Measurement::Stereo { .. } => 3,
+            Measurement::Custom(c) => c.dof(),
+        }
+    }
+
+    /// The 95 % chi2 gate for this residual's dimension (5.991 / 7.815 / 9.488).
+    pub fn chi2_threshold(&self) -> f64 {
+        chi2_95(self.dof())
+    }
+
+    /// The Huber threshold on the whitened residual norm, `sqrt(chi2_threshold())`.
+    pub fn huber_delta(&self) -> f64 {
+        self.chi2_threshold().sqrt()
+    }
+
+    /// Evaluates the residual and its Jacobian at the camera-frame point `p_c`; `None` when the
+    /// point is not in front of the camera (`z <= MIN_DEPTH`) or the custom residual is undefined.
+    pub fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock> {
+        if p_c.z.is_nan() || p_c.z <= MIN_DEPTH {
+            return None;
+        }
+        let inv_z = 1.0 / p_c.z;
+        let x_z = p_c.x * inv_z;
+        let y_z = p_c.y * inv_z;
+        let pu = camera.fx * x_z + camera.cx;
+        let pv = camera.fy * y_z + camera.cy;
+        // d(u, v) / d p_c.
+        let du = [camera.fx * inv_z, 0.0, -camera.fx * x_z * inv_z];
+        let dv = [0.0, camera.fy * inv_z, -camera.fy * y_z * inv_z];
+        let mut block = ResidualBlock {
+            residual: Vector4::zeros(),
+            d_residual_d_point: Matrix4x3::zeros(),
+        };
+        let (u, v) = match self {
+            Measurement::Mono { u, v } => (*u, *v),
+            Measurement::Stereo { u, v, ur } => {
+                block.residual[2] = pu - camera.bf * inv_z - ur;
+                let dur = [du[0], 0.0, du[2] + camera.bf * inv_z * inv_z];
+                for (c, d) in dur.iter().enumerate() {
+                    block.d_residual_d_point[(2, c)] = *d;
+                }
+                (*u, *v)
+            }
+            Measurement::Custom(c) => return c.evaluate(camera, p_c),
+        };
+        block.residual[0] = pu - u;
+        block.residual[1] = pv - v;
+        for c in 0..3 {
+            block.d_residual_d_point[(0, c)] = du[c];
+            block.d_residual_d_point[(1, c)] = dv[c];
+        }
+        Some(block)
+    }
+}
+
+/// One observation reduced to what the normal equations need, in camera-point coordinates:
+/// `jtj = w J^T J` and `jtr = w J^T r` (3x3 and 3-vector, `w` = information x robust weight).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PointLinearization {
+    /// Weighted `J^T J` with respect to the camera-frame point.
+    pub jtj: Matrix3<f64>,
+    /// Weighted `J^T r` with respect to the camera-frame point.
+    pub jtr: Vector3<f64>,
+}
+
+/// The observation's raw chi2 at `p_c`, or `None` when the residual is undefined there.
+pub(crate) fn observation_chi2(
+    camera: &Camera,
+    measurement: &Measurement,
+    inv_sigma2: f64,
+    p_c: &Vector3<f64>,
+) -> Option<f64> {
+    let block = measurement.evaluate(camera, p_c)?;
+    Some(inv_sigma2 * block.residual.norm_squared())
+}
+
+/// Linearizes one observation at `p_c`; `robust_weight` maps the raw chi2 to the IRLS weight
+/// (1 without a kernel).
+pub(crate) fn linearize_observation(
+    camera: &Camera,
+    measurement: &Measurement,
+    inv_sigma2: f64,
+    p_c: &Vector3<f64>,
+    robust_weight: impl Fn(f64) -> f64,
+) -> Option<PointLinearization> {
+    let block = measurement.evaluate(camera, p_c)?;
+    let chi2 = inv_sigma2 * block.residual.norm_squared();
+    let w = inv_sigma2 * robust_weight(chi2);
+    let j = &block.d_residual_d_point;
+    Some(PointLinearization {
+        jtj: j.transpose() * j * w,
+        jtr: j.transpose() * block.residual * w,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optimize::numdiff::assert_jacobian;
+    use nalgebra::DVector;
+
+    #[derive(Debug)]
+    struct DepthOnly;
+
+    impl CameraResidual for DepthOnly {
+        fn dof(&self) -> usize {
+            1
+        }
+        fn evaluate(&self, _camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock> {
+            let mut block = ResidualBlock {
+                residual: Vector4::zeros(),
+                d_residual_d_point: Matrix4x3::zeros(),
+            };
+            block.residual[0] = p_c.z - 2.0;
+            block.d_residual_d_point[(0, 2)] = 1.0;
+            Some(block)
+        }
+    }
+
+    fn measurements(camera: &Camera) -> Vec<Measurement> {
+        vec![
+            Measurement::Mono { u: 300.0, v: 200.0 },
+            Measurement::Stereo {
+                u: 300.0,
+                v: 200.0,
+                ur: 290.0,
+            },
+            Measurement::rgbd(camera, 310.0, 250.0, 2.2),
+            Measurement::Custom(Arc::new(DepthOnly)),
+        ]
+    }
+
+    #[test]
+    fn jacobians_match_central_differences() {
+        let camera = Camera::tum_fr3();
+        for m in measurements(&camera) {
+            for p in [
+                Vector3::new(0.1, -0.2, 2.0),
+                Vector3::new(-1.5, 0.8, 0.7),
+                Vector3::new(3.0, 2.0, 9.0),
+            ] {
+                let block = m.evaluate(&camera, &p).unwrap();
+                let f = |x: &DVector<f64>| {
+                    let q = Vector3::new(x[0], x[1], x[2]);
+                    DVector::from_column_slice(m.evaluate(&camera, &q).unwrap().residual.as_slice())
+                };
+                let analytic =
+                    nalgebra::DMatrix::from_column_slice(4, 3, block.d_residual_d_point.as_slice());
+                assert_jacobian(
+                    &format!("{m:?} at {p:?}"),
+                    f,
+                    &DVector::from_column_slice(p.as_slice()),
+                    &analytic,
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn residual_is_zero_at_the_true_projection() {
+        let camera = Camera::tum_fr3();
+        let p = Vector3::new(0.4, -0.3, 2.5);
+        let uv = camera.project(&p);
+        let m = Measurement::rgbd(&camera, uv.x, uv.y, p.z);
+        let block = m.evaluate(&camera, &p).unwrap();
+        assert!(block.residual.norm() < 1e-12);
+        // The virtual right column is u - bf/z: one pixel of disparity per bf / z^2 metres.
+        let Measurement::Stereo { u, ur, .. } = m else {
+            panic!("rgbd must build a stereo measurement")
+        };
+        assert!((u - ur - camera.bf / p.z).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unused_rows_are_zero_and_dof_matches() {
+        let camera = Camera::tum_fr3();
+        let p = Vector3::new(0.5, 0.5, 1.5);
+        for m in measurements(&camera) {
+            let block = m.evaluate(&camera, &p).unwrap();
+            for row in m.dof()..MAX_RESIDUAL_DOF {
+                assert_eq!(block.residual[row], 0.0, "{m:?}");
+                assert!(block.d_residual_d_point.row(row).iter().all(|&x| x == 0.0));
+            }
+        }
+    }
+
+    #[test]
+    fn points_behind_the_camera_have_no_residual() {
+        let camera = Camera::tum_fr3();
+        for m in measurements(&camera) {
+            assert!(m.evaluate(&camera, &Vector3::new(0.1, 0.1, -1.0)).is_none());
+            assert!(m.evaluate(&camera, &Vector3::new(0.1, 0.1, 0.0)).is_none());
+        }
+    }
+
+    #[test]
+    fn gates_follow_the_chi2_table() {
+        let camera = Camera::tum_fr3();
+        let gates: Vec<f64> = measurements(&camera)
+            .iter()
+            .map(|m| m.chi2_threshold())
+            .collect();
+        assert_eq!(gates, vec![5.991, 7.815, 7.815, 3.841]);
+        assert_eq!(chi2_95(4), 9.488);
+        assert!(
+            (Measurement::Mono { u: 0.0, v: 0.0 }.huber_delta() - 5.991f64.sqrt()).abs() < 1e-15
+        );
+    }
+}

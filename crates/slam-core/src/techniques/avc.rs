@@ -1,0 +1,512 @@
+//! Adaptive Virtual Camera (paper III-B, Eq. 8-12): the 4-D residual of an observation with
+//! measured depth, projecting only the depth-axis part of the 3-D error onto a virtual camera
+//! placed, per observation, at baseline `b` along the in-image component of that error.
+//!
+//! # Geometry (camera coordinates, camera centre C at the origin)
+//! - D: the keypoint (u, v) back-projected with its measured depth (so D projects to (u, v)).
+//! - M: the map point in camera coordinates (the point the solver moves).
+//! - D' = |CD| unit(CM) (Eq. 8): D rotated onto the ray CM, so D'M (Eq. 9) is the error along
+//!   the depth axis CM and DD' has the same image projection as the 3-D error DM.
+//! - The virtual camera C' = (t_x, t_y, 0) = b * unit(DD' - (DD'.z) z) (Eq. 10, 11), falling back
+//!   to (b, 0, 0) (ORB-SLAM2's static right camera) when that in-plane component vanishes.
+//! - Residual (Eq. 12): (x_M - x_D, y_M - y_D, f_x t_x (1/Z_D' - 1/Z_M), f_y t_y (1/Z_D' - 1/Z_M)),
+//!   with 1/Z_D' = |M| / (|D| Z_M), so rows 3 and 4 vanish exactly when |M| = |D|.
+//!
+//! # Interpretations (documented choices)
+//! - Eq. 11 writes `C' = b DD'_proj`. Read literally, |C'| would be b times a length in metres,
+//!   which contradicts the text right above it ("the locus of C' is a circle of radius b centred
+//!   at C"). We therefore use b times the **unit** vector of DD'_proj: |C'| = b always.
+//! - The virtual-camera direction is **held fixed while differentiating**: it is part of the
+//!   linearisation point, like a measurement or a robust weight, and is stored in the residual.
+//!   It is chosen from an estimate of M when the residual is built and can be re-chosen with
+//!   [`VirtualCameraResidual::aim_at`] between optimization rounds (the pose-estimation hook does
+//!   so with the current pose). [`CameraResidual::evaluate`] is then a smooth function of M whose
+//!   analytic Jacobian is exact. Differentiating through the direction was rejected: the
+//!   direction is undefined (and its derivative unbounded, ~1/|DD'_xy|) exactly where the solver
+//!   converges (M on the ray CD), while the cost barely depends on it (|r_3|^2 + |r_4|^2 =
+//!   (|M|-|D|)^2/(|D| Z_M)^2 (f_x^2 t_x^2 + f_y^2 t_y^2), direction-independent when f_x = f_y),
+//!   so Gauss-Newton's J^T J would gain a spurious stiff term the true Hessian cancels.
+//! - Rows 3 and 4 use the keypoint's octave information `1 / sigma^2`, like ORB-SLAM2's uR row.
+//! - The residual is defined for M in front of the camera (the solvers check `Z_M > MIN_DEPTH`).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+
+use nalgebra::{Matrix4x3, Vector2, Vector3, Vector4};
+
+use crate::module::noise::AvcParams;
+use crate::optimize::{CameraResidual, Measurement, ResidualBlock};
+use crate::Camera;
+
+/// An in-image component of DD' at or below this length (metres) counts as vanished: the
+/// virtual camera falls back to +x. (One millionth of a pixel at 2 m is ~4e-9 m.)
+pub const DIRECTION_EPSILON: f64 = 1e-9;
+
+/// The unit direction, in the image plane, of the virtual camera for measured point `d` and map
+/// point `m` (both camera coordinates): unit(component of DD' parallel to the image plane),
+/// with D' = |d| unit(m) (Eq. 8, 10). Falls back to +x `(1, 0)` when that component is at or
+/// below [`DIRECTION_EPSILON`] or `m` is the camera centre.
+pub fn virtual_camera_direction(d: &Vector3<f64>, m: &Vector3<f64>) -> Vector2<f64> {
+    let m_norm = m.norm();
+    if m_norm.is_nan() || m_norm <= 0.0 || !m_norm.is_finite() {
+        return Vector2::new(1.0, 0.0);
+    }
+    let d_prime = m * (d.norm() / m_norm);
+    let in_plane = Vector2::new(d_prime.x - d.x, d_prime.y - d.y);
+    let len = in_plane.norm();
+    if len > DIRECTION_EPSILON && len.is_finite() {
+        in_plane / len
+    } else {
+        Vector2::new(1.0, 0.0)
+    }
+}
+
+/// The paper's 4-D AVC residual of one keypoint with measured depth (Eq. 12), for pose-only
+/// optimization and bundle adjustment through [`Measurement::Custom`]. See the module doc for
+/// the geometry and for why the virtual-camera direction is stored rather than differentiated.
+///
+/// Cloning a [`Measurement`] shares this residual (it sits behind an `Arc`), so
+/// [`aim_at`](Self::aim_at) on one clone aims all of them; build one residual per observation.
+#[derive(Debug)]
+pub struct VirtualCameraResidual {
+    /// Measured keypoint column (undistorted pixels).
+    u: f64,
+    /// Measured keypoint row (undistorted pixels).
+    v: f64,
+    /// D: the keypoint back-projected with its measured depth, camera coordinates (metres).
+    measured_point: Vector3<f64>,
+    /// |CD|, metres.
+    range: f64,
+    /// Virtual camera baseline b, metres.
+    baseline: f64,
+    /// Angle (radians, `atan2(t_y, t_x)`) of the virtual camera on its circle of radius b, as
+    /// f64 bits; atomic so the direction can be re-chosen between rounds through a shared `Arc`.
+    angle_bits: AtomicU64,
+}
+
+impl VirtualCameraResidual {
+    /// The residual of keypoint (u, v) (undistorted pixels) with measured depth `depth`
+    /// (metres), virtual baseline `baseline` (metres), its virtual camera aimed from the current
+    /// estimate `estimate` of the map point in camera coordinates. `None` unless `depth` and
+    /// `baseline` are finite and positive.
+    pub fn new(
+        camera: &Camera,
+        u: f64,
+        v: f64,
+        depth: f64,
+        baseline: f64,
+        estimate: &Vector3<f64>,
+    ) -> Option<Self> {
+        if !(depth > 0.0 && depth.is_finite() && baseline > 0.0 && baseline.is_finite()) {
+            return None;
+        }
+        let measured_point = camera.unproject(u, v, depth);
+        let residual = VirtualCameraResidual {
+            u,
+            v,
+            measured_point,
+            range: measured_point.norm(),
+            baseline,
+            angle_bits: AtomicU64::new(0f64.to_bits()),
+        };
+        residual.aim_at(estimate);
+        Some(residual)
+    }
+
+    /// Re-chooses the virtual camera from the estimate `p_c` of the map point in camera
+    /// coordinates (Eq. 8-11). The solvers treat the direction as fixed until the next call.
+    pub fn aim_at(&self, p_c: &Vector3<f64>) {
+        let dir = virtual_camera_direction(&self.measured_point, p_c);
+        let angle = dir.y.atan2(dir.x);
+        self.angle_bits.store(angle.to_bits(), Ordering::Relaxed);
+    }
+
+    /// The virtual camera centre (t_x, t_y) in the image plane of the real camera (metres);
+    /// its norm is the baseline b.
+    pub fn virtual_camera(&self) -> Vector2<f64> {
+        let angle = f64::from_bits(self.angle_bits.load(Ordering::Relaxed));
+        Vector2::new(angle.cos(), angle.sin()) * self.baseline
+    }
+
+    /// D: the measured point in camera coordinates (metres).
+    pub fn measured_point(&self) -> Vector3<f64> {
+        self.measured_point
+    }
+
+    /// The virtual baseline b (metres).
+    pub fn baseline(&self) -> f64 {
+        self.baseline
+    }
+}
+
+impl CameraResidual for VirtualCameraResidual {
+    fn dof(&self) -> usize {
+        4
+    }
+
+    fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock> {
+        let (x, y, z) = (p_c.x, p_c.y, p_c.z);
+        let n = p_c.norm();
+        if z.is_nan() || z <= 0.0 || n.is_nan() || n <= 0.0 || !n.is_finite() {
+            return None;
+        }
+        let t = self.virtual_camera();
+        let inv_z = 1.0 / z;
+        let inv_rho = 1.0 / self.range;
+        // g = 1/Z_D' - 1/Z_M with Z_D' = |D| Z_M / |M|.
+        let g = (n * inv_rho - 1.0) * inv_z;
+        // dg/dM = M / (|M| |D| Z_M) - (|M|/|D| - 1) / Z_M^2 * e_z.
+        let k = inv_rho / n * inv_z;
+        let dg = Vector3::new(x * k, y * k, z * k - g * inv_z);
+        let (ax, ay) = (camera.fx * t.x, camera.fy * t.y);
+        let residual = Vector4::new(
+            camera.fx * x * inv_z + camera.cx - self.u,
+            camera.fy * y * inv_z + camera.cy - self.v,
+            ax * g,
+            ay * g,
+        );
+        #[rustfmt::skip]
+        let d_residual_d_point = Matrix4x3::new(
+            camera.fx * inv_z, 0.0, -camera.fx * x * inv_z * inv_z,
+            0.0, camera.fy * inv_z, -camera.fy * y * inv_z * inv_z,
+            ax * dg.x, ax * dg.y, ax * dg.z,
+            ay * dg.x, ay * dg.y, ay * dg.z,
+        );
+        Some(ResidualBlock {
+            residual,
+            d_residual_d_point,
+        })
+    }
+}
+
+/// The AVC measurement of keypoint (u, v) with measured depth `depth` (metres), aimed from the
+/// map-point estimate `estimate` (camera coordinates): what `measurement_for` builds for a
+/// keypoint with depth when AVC is on. `None` for a keypoint without valid depth (the caller
+/// keeps its mono / stereo residual).
+pub fn avc_measurement(
+    camera: &Camera,
+    u: f64,
+    v: f64,
+    depth: f64,
+    params: &AvcParams,
+    estimate: &Vector3<f64>,
+) -> Option<Measurement> {
+    VirtualCameraResidual::new(camera, u, v, depth, params.baseline, estimate)
+        .map(|r| Measurement::Custom(Arc::new(r)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{exp_se3, Vector6};
+    use crate::optimize::{pose_optimization, pose_optimization_with, PoseObservation};
+    use crate::optimize::{PoseOptConfig, MIN_DEPTH};
+    use crate::techniques::test_support::{
+        assert_jacobian, gaussian, perturb, pose_error, rng, sigma_z,
+    };
+    use nalgebra::{DMatrix, DVector, Isometry3, Point3, Translation3, UnitQuaternion};
+    use rand::Rng;
+
+    fn residual_at(r: &VirtualCameraResidual, camera: &Camera, p: &Vector3<f64>) -> Vector4<f64> {
+        r.evaluate(camera, p).unwrap().residual
+    }
+
+    #[test]
+    fn jacobian_matches_central_differences() {
+        let camera = Camera::tum_fr3();
+        let mut g = rng(1);
+        for _ in 0..200 {
+            let u = g.random_range(5.0..635.0);
+            let v = g.random_range(5.0..475.0);
+            let depth = g.random_range(0.5..6.0);
+            let d = camera.unproject(u, v, depth);
+            // Map points from nearly on the ray to grossly off it.
+            let scale = [1e-3, 0.05, 0.5][g.random_range(0..3)];
+            let m = d + Vector3::new(gaussian(&mut g), gaussian(&mut g), gaussian(&mut g)) * scale;
+            if m.z <= 0.2 {
+                continue;
+            }
+            let r = VirtualCameraResidual::new(&camera, u, v, depth, 0.09, &m).unwrap();
+            let block = r.evaluate(&camera, &m).unwrap();
+            let f = |x: &DVector<f64>| {
+                let q = Vector3::new(x[0], x[1], x[2]);
+                DVector::from_column_slice(residual_at(&r, &camera, &q).as_slice())
+            };
+            assert_jacobian(
+                &format!("AVC at {m:?}"),
+                f,
+                &DVector::from_column_slice(m.as_slice()),
+                &DMatrix::from_column_slice(4, 3, block.d_residual_d_point.as_slice()),
+            );
+        }
+    }
+
+    #[test]
+    fn rows_follow_equation_12() {
+        let camera = Camera::tum_fr3();
+        let (u, v, depth) = (400.0, 150.0, 2.5);
+        let d = camera.unproject(u, v, depth);
+        let m = Vector3::new(d.x + 0.03, d.y - 0.02, d.z + 0.1);
+        let r = VirtualCameraResidual::new(&camera, u, v, depth, 0.09, &m).unwrap();
+        let e = residual_at(&r, &camera, &m);
+        // Eq. 8-11 written out directly.
+        let d_prime = m.normalize() * d.norm();
+        let dd = d_prime - d;
+        let t = Vector2::new(dd.x, dd.y).normalize() * 0.09;
+        assert!((r.virtual_camera() - t).norm() < 1e-12);
+        assert!((r.virtual_camera().norm() - 0.09).abs() < 1e-12, "|C'| = b");
+        let pm = camera.project(&m);
+        let expected = Vector4::new(
+            pm.x - u,
+            pm.y - v,
+            camera.fx * t.x / d_prime.z - camera.fx * t.x / m.z,
+            camera.fy * t.y / d_prime.z - camera.fy * t.y / m.z,
+        );
+        assert!((e - expected).norm() < 1e-9, "{e} vs {expected}");
+        // The 2-D rows are the ORB-SLAM2 rows.
+        let stereo = Measurement::rgbd(&camera, u, v, depth)
+            .evaluate(&camera, &m)
+            .unwrap();
+        assert!((e.fixed_rows::<2>(0) - stereo.residual.fixed_rows::<2>(0)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn depth_rows_vanish_iff_range_agrees() {
+        let camera = Camera::tum_fr3();
+        let (u, v, depth) = (250.0, 300.0, 3.0);
+        let d = camera.unproject(u, v, depth);
+        // Same range, different bearing: only the 2-D rows are non-zero.
+        let m = UnitQuaternion::from_euler_angles(0.01, -0.02, 0.0) * d;
+        let r = VirtualCameraResidual::new(&camera, u, v, depth, 0.09, &m).unwrap();
+        let e = residual_at(&r, &camera, &m);
+        assert!(e[2].abs() < 1e-9 && e[3].abs() < 1e-9, "{e}");
+        assert!(e[0].abs() > 1.0 || e[1].abs() > 1.0);
+        // Same bearing, 10 cm further: only the depth rows, with norm f b dR / (|D| Z_M).
+        let m = d * (1.0 + 0.1 / d.norm());
+        let r = VirtualCameraResidual::new(&camera, u, v, depth, 0.09, &m).unwrap();
+        let e = residual_at(&r, &camera, &m);
+        assert!(e[0].abs() < 1e-9 && e[1].abs() < 1e-9);
+        let expected = camera.fx * 0.09 * 0.1 / (d.norm() * m.z);
+        assert!((e[2] - expected).abs() < 1e-9, "fallback +x: {e}");
+        assert_eq!(e[3], 0.0);
+    }
+
+    #[test]
+    fn direction_falls_back_to_plus_x() {
+        let camera = Camera::tum_fr3();
+        let d = camera.unproject(100.0, 400.0, 2.0);
+        // M on the ray CD: DD' = 0.
+        assert_eq!(
+            virtual_camera_direction(&d, &(d * 1.3)),
+            Vector2::new(1.0, 0.0)
+        );
+        assert_eq!(virtual_camera_direction(&d, &d), Vector2::new(1.0, 0.0));
+        assert_eq!(
+            virtual_camera_direction(&d, &Vector3::zeros()),
+            Vector2::new(1.0, 0.0)
+        );
+        // Off the ray: the direction follows the lateral offset, here mostly -y.
+        let dir = virtual_camera_direction(&d, &(d + Vector3::new(0.0, -0.05, 0.0)));
+        assert!(dir.y < -0.9 && (dir.norm() - 1.0).abs() < 1e-12, "{dir}");
+        let r = VirtualCameraResidual::new(&camera, 100.0, 400.0, 2.0, 0.05, &d).unwrap();
+        assert!((r.virtual_camera() - Vector2::new(0.05, 0.0)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn aim_at_moves_the_virtual_camera_only_when_asked() {
+        let camera = Camera::tum_fr3();
+        let d = camera.unproject(320.0, 240.0, 2.0);
+        let r = VirtualCameraResidual::new(&camera, 320.0, 240.0, 2.0, 0.09, &d).unwrap();
+        let up = d + Vector3::new(0.0, 0.04, 0.02);
+        let before = r.virtual_camera();
+        let _ = r.evaluate(&camera, &up);
+        assert_eq!(r.virtual_camera(), before, "evaluate must not re-aim");
+        r.aim_at(&up);
+        assert!(r.virtual_camera().y > 0.08, "{}", r.virtual_camera());
+    }
+
+    #[test]
+    fn rejects_invalid_depth_and_points_behind() {
+        let camera = Camera::tum_fr3();
+        let m = Vector3::new(0.0, 0.0, 1.0);
+        for depth in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(VirtualCameraResidual::new(&camera, 1.0, 1.0, depth, 0.09, &m).is_none());
+        }
+        assert!(VirtualCameraResidual::new(&camera, 1.0, 1.0, 1.0, 0.0, &m).is_none());
+        let meas = avc_measurement(&camera, 300.0, 200.0, 2.0, &AvcParams::default(), &m).unwrap();
+        assert!(meas
+            .evaluate(&camera, &Vector3::new(0.1, 0.1, -1.0))
+            .is_none());
+        assert!(meas
+            .evaluate(&camera, &Vector3::new(0.1, 0.1, MIN_DEPTH / 2.0))
+            .is_none());
+    }
+
+    #[test]
+    fn four_dof_gate_and_huber_delta() {
+        let camera = Camera::tum_fr3();
+        let m = avc_measurement(
+            &camera,
+            300.0,
+            200.0,
+            2.0,
+            &AvcParams::default(),
+            &Vector3::new(0.0, 0.0, 2.0),
+        )
+        .unwrap();
+        assert_eq!(m.dof(), 4);
+        assert_eq!(m.chi2_threshold(), 9.488);
+        assert!((m.huber_delta() - 9.488f64.sqrt()).abs() < 1e-15);
+    }
+
+    fn true_pose() -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(0.1, -0.2, 0.25),
+            UnitQuaternion::from_euler_angles(-0.05, 0.1, 0.15),
+        )
+    }
+
+    /// `n` RGB-D observations seen from `true_pose()`: 1 px keypoint noise, Nguyen's axial depth
+    /// noise, and a fraction `gross` of them, closer than 3 m, with a depth 40-100 % too far or
+    /// 30-50 % too near (a boundary mix-up; the depth rows scale with f b dZ / Z^2, so smaller
+    /// relative errors or larger depths stay within a pixel and cannot be told from noise).
+    /// Returns (world point, u, v, measured depth, is gross).
+    fn rgbd_scene(n: usize, gross: f64, seed: u64) -> Vec<(Vector3<f64>, f64, f64, f64, bool)> {
+        let camera = Camera::tum_fr3();
+        let twc = true_pose().inverse();
+        let mut g = rng(seed);
+        (0..n)
+            .map(|i| {
+                let is_gross = (i as f64) < gross * n as f64;
+                let (u, v) = (g.random_range(10.0..630.0), g.random_range(10.0..470.0));
+                let z = g.random_range(0.8..if is_gross { 3.0 } else { 4.5 });
+                let pw = (twc * Point3::from(camera.unproject(u, v, z))).coords;
+                let depth = if is_gross {
+                    if g.random_bool(0.5) {
+                        z * g.random_range(1.4..2.0)
+                    } else {
+                        z * g.random_range(0.5..0.7)
+                    }
+                } else {
+                    z + sigma_z(z) * gaussian(&mut g)
+                };
+                let (nu, nv) = (u + gaussian(&mut g), v + gaussian(&mut g));
+                (pw, nu, nv, depth, is_gross)
+            })
+            .collect()
+    }
+
+    /// Pose observations of `scene` (RGB-D 3-D residuals, or AVC residuals aimed from `start`),
+    /// and the AVC residuals themselves (empty for the 3-D residual) so a hook can re-aim them.
+    fn observations(
+        scene: &[(Vector3<f64>, f64, f64, f64, bool)],
+        start: &Isometry3<f64>,
+        avc: bool,
+    ) -> (Vec<PoseObservation>, Vec<Arc<VirtualCameraResidual>>) {
+        let camera = Camera::tum_fr3();
+        let mut residuals = Vec::new();
+        let obs = scene
+            .iter()
+            .map(|&(pw, u, v, depth, _)| {
+                let estimate = (start * Point3::from(pw)).coords;
+                let measurement = if avc {
+                    let b = AvcParams::default().baseline;
+                    let r = Arc::new(
+                        VirtualCameraResidual::new(&camera, u, v, depth, b, &estimate).unwrap(),
+                    );
+                    residuals.push(r.clone());
+                    Measurement::Custom(r)
+                } else {
+                    Measurement::rgbd(&camera, u, v, depth)
+                };
+                PoseObservation {
+                    point_world: pw,
+                    measurement,
+                    inv_sigma2: 1.0,
+                }
+            })
+            .collect();
+        (obs, residuals)
+    }
+
+    #[test]
+    fn pose_optimization_recovers_the_pose_like_the_3d_residual() {
+        let camera = Camera::tum_fr3();
+        let scene = rgbd_scene(250, 0.0, 3);
+        let start = perturb(&true_pose(), 0.08, 4f64.to_radians(), &mut rng(4));
+        let cfg = PoseOptConfig::default();
+        let base = pose_optimization(
+            &camera,
+            &start,
+            &observations(&scene, &start, false).0,
+            &cfg,
+        );
+        let (obs, residuals) = observations(&scene, &start, true);
+        let avc = pose_optimization(&camera, &start, &obs, &cfg);
+        let (bt, br) = pose_error(&base.pose, &true_pose());
+        let (at, ar) = pose_error(&avc.pose, &true_pose());
+        assert!(bt < 0.01 && br < 0.2, "3-D residual: {bt} m {br} deg");
+        assert!(at < 0.01 && ar < 0.2, "AVC residual: {at} m {ar} deg");
+        assert!(at < 2.0 * bt + 0.002, "AVC {at} m vs 3-D {bt} m");
+        assert!(avc.n_inliers >= 220, "{} AVC inliers", avc.n_inliers);
+        // Re-aiming every virtual camera before each round (the pose-estimation hook) converges
+        // to the same pose.
+        let aimed = pose_optimization_with(&camera, &start, &obs, &cfg, &mut |_, pose, _| {
+            for (o, r) in obs.iter().zip(&residuals) {
+                r.aim_at(&(pose * Point3::from(o.point_world)).coords);
+            }
+        });
+        let (dt, dr) = pose_error(&aimed.pose, &avc.pose);
+        assert!(
+            dt < 1e-4 && dr < 0.01,
+            "re-aimed differs by {dt} m {dr} deg"
+        );
+    }
+
+    #[test]
+    fn gross_depth_errors_fail_the_four_dof_gate() {
+        let camera = Camera::tum_fr3();
+        let scene = rgbd_scene(200, 0.15, 5);
+        let start = perturb(&true_pose(), 0.05, 2f64.to_radians(), &mut rng(6));
+        let (obs, _) = observations(&scene, &start, true);
+        let r = pose_optimization(&camera, &start, &obs, &PoseOptConfig::default());
+        let (dt, dr) = pose_error(&r.pose, &true_pose());
+        assert!(dt < 0.01 && dr < 0.2, "{dt} m {dr} deg");
+        for (k, s) in scene.iter().enumerate() {
+            if s.4 {
+                assert!(
+                    !r.inliers[k],
+                    "gross depth error {k} kept, chi2 {}",
+                    r.chi2[k]
+                );
+            }
+            assert_eq!(r.inliers[k], r.chi2[k] <= 9.488);
+        }
+        // The pose Jacobian the solver chains (d r / d p_c * [-[p]x, I]) matches too.
+        let o = &obs[40];
+        let f = |x: &DVector<f64>| {
+            let xi = Vector6::from_column_slice(x.as_slice());
+            let p = (exp_se3(&xi) * r.pose * Point3::from(o.point_world)).coords;
+            DVector::from_column_slice(
+                o.measurement
+                    .evaluate(&camera, &p)
+                    .unwrap()
+                    .residual
+                    .as_slice(),
+            )
+        };
+        let p = (r.pose * Point3::from(o.point_world)).coords;
+        let j = o
+            .measurement
+            .evaluate(&camera, &p)
+            .unwrap()
+            .d_residual_d_point
+            * crate::geometry::d_point_d_left_perturbation(&p);
+        assert_jacobian(
+            "AVC pose Jacobian",
+            f,
+            &DVector::zeros(6),
+            &DMatrix::from_column_slice(4, 6, j.as_slice()),
+        );
+    }
+}

@@ -1,0 +1,25 @@
+//! The paper's two noise-resilience techniques as standalone building blocks, and the data
+//! helpers of its analyses:
+//! - [`mcor`]: Map-point Consensus based Outlier Rejection (III-A, Algorithm 1) — per-map-point
+//!   clusters of back-projected observations, FL / CL metrics and the hierarchical gate run
+//!   before every pose-optimization round;
+//! - [`avc`]: the Adaptive Virtual Camera residual (III-B, Eq. 8-12), a 4-D
+//!   [`crate::optimize::CameraResidual`] for pose-only optimization and bundle adjustment;
+//! - [`correlation`]: the error terms and Pearson correlations of Table II.
+//!
+//! The system switches them on through `Config::mcor` / `Config::avc`
+//! ([`crate::module::noise`]); the hook points are in [`crate::module::pose_estimation`].
+
+pub mod avc;
+pub mod correlation;
+pub mod mcor;
+#[cfg(test)]
+mod test_support;
+
+pub use avc::{avc_measurement, virtual_camera_direction, VirtualCameraResidual};
+pub use correlation::{correlation_analysis, error_terms, pearson, CorrelationTable, ErrorTerms};
+pub use mcor::{
+    cluster_passes, feature_metrics, feature_passes, mcor_gate, ClusterFeature, ClusterMetrics,
+    FeatureMetrics, McorCluster, McorMatch, McorMetrics, McorOutcome, McorSelection, McorVerdict,
+    MCOR_CLUSTER_CAPACITY,
+};

@@ -1,0 +1,102 @@
+//! Shared helpers of the end-to-end tests: run the system over a synthetic sequence and score
+//! its trajectory (SE3 Umeyama alignment on frame-index correspondences, ATE RMSE).
+
+#![allow(dead_code)]
+
+use std::sync::Arc;
+
+use nalgebra::{Isometry3, Point3, Vector3};
+use slam_core::solve::absolute_orientation;
+use slam_core::system::{Config, System, TrackingState};
+use slam_core::FrameInput;
+use synth::{Generator, SynthConfig};
+
+/// What a run produced.
+pub struct Run {
+    /// Estimated T_world_camera per tracked frame, with its frame index.
+    pub estimate: Vec<(usize, Isometry3<f64>)>,
+    /// Ground-truth T_world_camera per frame.
+    pub truth: Vec<Isometry3<f64>>,
+    /// Tracking state per frame.
+    pub states: Vec<TrackingState>,
+    /// Keyframes at the end.
+    pub keyframes: usize,
+    /// The raw trajectory (timestamp, pose), for bit-identity checks.
+    pub trajectory: Vec<(f64, Isometry3<f64>)>,
+}
+
+/// Renders `n` frames of `synth_cfg` with `seed` and tracks them.
+pub fn run(synth_cfg: SynthConfig, seed: u64, n: usize, config: Config) -> Run {
+    let gen = Generator::new(synth_cfg, seed);
+    let camera = gen.camera();
+    let mut system = System::new(camera, config);
+    let mut truth = Vec::new();
+    let mut states = Vec::new();
+    let mut stamps = Vec::new();
+    for i in 0..n {
+        let f = gen.frame(i);
+        let input = FrameInput {
+            timestamp: f.timestamp,
+            image: Arc::new(f.gray),
+            depth: f.depth.map(Arc::new),
+            right: f.right.map(Arc::new),
+        };
+        let r = system.track(&input);
+        if std::env::var_os("NF_VERBOSE").is_some() {
+            let s = &r.stats;
+            eprintln!(
+                "{i:4} {:?} kp {} m {} in {} trk {} kf {} ({}/{}) reloc {} t {:.1}/{:.1}/{:.1}/{:.1}",
+                s.state, s.n_keypoints, s.n_matches, s.n_inliers, s.n_tracked_map_points,
+                s.keyframe_inserted, s.n_keyframes, s.n_map_points, s.relocalized,
+                s.time_features_ms, s.time_tracking_ms, s.time_mapping_ms, s.time_ba_ms
+            );
+        }
+        truth.push(f.pose_wc);
+        states.push(r.state);
+        stamps.push(f.timestamp);
+    }
+    let trajectory = system.trajectory();
+    let estimate = trajectory
+        .iter()
+        .map(|(t, p)| {
+            let i = stamps
+                .iter()
+                .position(|s| s == t)
+                .expect("stamp of an input frame");
+            (i, *p)
+        })
+        .collect();
+    Run {
+        estimate,
+        truth,
+        states,
+        keyframes: system.keyframe_count(),
+        trajectory,
+    }
+}
+
+/// ATE RMSE (metres) of the tracked frames after SE3 alignment to the truth.
+pub fn ate_rmse(run: &Run) -> f64 {
+    let est: Vec<Vector3<f64>> = run
+        .estimate
+        .iter()
+        .map(|(_, p)| p.translation.vector)
+        .collect();
+    let gt: Vec<Vector3<f64>> = run
+        .estimate
+        .iter()
+        .map(|(i, _)| run.truth[*i].translation.vector)
+        .collect();
+    let t = absolute_orientation(&est, &gt).expect("enough poses");
+    let se: f64 = est
+        .iter()
+        .zip(&gt)
+        .map(|(e, g)| (t.transform_point(&Point3::from(*e)).coords - g).norm_squared())
+        .sum();
+    (se / est.len() as f64).sqrt()
+}
+
+/// Number of frames whose state is tracked.
+pub fn tracked(run: &Run) -> usize {
+    run.states.iter().filter(|s| s.is_tracked()).count()
+}

@@ -1,0 +1,567 @@
+//! Configuration of a synthetic sequence: camera, trajectory, scene options, image noise and
+//! every component of the depth-sensor model, each its own switch; plus the named presets.
+
+use slam_core::{Camera, SensorKind};
+use std::fmt;
+
+use crate::SynthError;
+
+/// Camera path through the room. All run at the camera's frame rate, are smooth (C-infinity),
+/// and move at most a few cm and a few degrees per frame at `motion_scale` 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Trajectory {
+    /// Handheld-like translation (+-25 cm) with a gentle look-at wobble, like fr1/fr3 `xyz`.
+    Xyz,
+    /// Rotation-heavy: roll / pitch / yaw of +-15..20 degrees around a nearly fixed point, like `rpy`.
+    Rpy,
+    /// A full 360-degree turn about the vertical in 20 s, from near the middle of the room.
+    Spin,
+}
+
+impl Trajectory {
+    /// Names accepted by [`Trajectory::from_name`].
+    pub const NAMES: [&'static str; 3] = ["xyz", "rpy", "spin"];
+
+    /// Parses `xyz`, `rpy` or `spin`.
+    pub fn from_name(name: &str) -> Result<Self, SynthError> {
+        match name {
+            "xyz" => Ok(Trajectory::Xyz),
+            "rpy" => Ok(Trajectory::Rpy),
+            "spin" => Ok(Trajectory::Spin),
+            _ => Err(SynthError::UnknownName {
+                what: "trajectory",
+                name: name.to_string(),
+                valid: Self::NAMES.join(", "),
+            }),
+        }
+    }
+
+    /// The name of the trajectory.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Trajectory::Xyz => "xyz",
+            Trajectory::Rpy => "rpy",
+            Trajectory::Spin => "spin",
+        }
+    }
+}
+
+/// How many rays are averaged for a pixel's colour (depth always comes from the pixel centre).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Supersampling {
+    /// One ray through the pixel centre (aliased edges).
+    None,
+    /// Centre ray weighted 1/2 plus the four pixel corners weighted 1/8 each (corners shared
+    /// with the neighbours): about 2 rays per pixel. Default.
+    Quincunx,
+    /// An n x n grid of rays inside the pixel (n >= 2), plus the centre ray for depth.
+    Grid(u32),
+}
+
+/// Photometric settings of the rendered images.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageConfig {
+    /// Standard deviation of the additive Gaussian grey-level noise, in grey levels (default 2.0).
+    pub noise_sigma: f64,
+    /// Anti-aliasing (default [`Supersampling::Quincunx`]).
+    pub supersampling: Supersampling,
+    /// Ambient share of the Lambertian shading, 0..1 (default 0.45).
+    pub ambient: f64,
+}
+
+impl Default for ImageConfig {
+    fn default() -> Self {
+        ImageConfig {
+            noise_sigma: 2.0,
+            supersampling: Supersampling::Quincunx,
+            ambient: 0.45,
+        }
+    }
+}
+
+/// Axial noise after Nguyen et al. 2012: sigma_z(z, theta) = a + b (z - z0)^2 metres, plus
+/// (when `grazing` is on) 0.0001 / sqrt(z) * theta^2 / (pi/2 - theta)^2 for incidence theta.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxialNoise {
+    /// Constant term `a`, metres (default 0.0012).
+    pub a: f64,
+    /// Quadratic coefficient `b`, 1/metre (default 0.0019).
+    pub b: f64,
+    /// Depth of the minimum, metres (default 0.4).
+    pub z0: f64,
+    /// Add Nguyen's grazing-angle term (default true).
+    pub grazing: bool,
+}
+
+impl Default for AxialNoise {
+    fn default() -> Self {
+        AxialNoise {
+            a: 0.0012,
+            b: 0.0019,
+            z0: 0.4,
+            grazing: true,
+        }
+    }
+}
+
+impl AxialNoise {
+    /// Standard deviation in metres at depth `z` (metres) and incidence angle `theta` (radians).
+    pub fn sigma(&self, z: f64, theta: f64) -> f64 {
+        let mut s = self.a + self.b * (z - self.z0).powi(2);
+        if self.grazing {
+            let t = theta.clamp(0.0, std::f64::consts::FRAC_PI_2 - 1e-3);
+            s += 0.0001 / z.max(1e-3).sqrt() * t * t / (std::f64::consts::FRAC_PI_2 - t).powi(2);
+        }
+        s
+    }
+}
+
+/// Disparity quantisation of a structured-light sensor: depth is measured as disparity
+/// d = bf / z rounded to 1/`subpixel` pixel, then converted back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisparityQuantisation {
+    /// Projector-camera baseline times focal length, metres * pixels (Kinect v1: 0.075 m * 580 px = 43.5).
+    pub bf: f64,
+    /// Disparity sub-pixel resolution, steps per pixel (Kinect v1: 8).
+    pub subpixel: f64,
+}
+
+impl Default for DisparityQuantisation {
+    fn default() -> Self {
+        DisparityQuantisation {
+            bf: 43.5,
+            subpixel: 8.0,
+        }
+    }
+}
+
+/// Lateral noise: a pixel's depth is taken from the neighbour at an offset of
+/// (round N(0, sigma), round N(0, sigma)) pixels, which mixes fore- and background at boundaries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LateralNoise {
+    /// Standard deviation of the offset, pixels (default 0.8).
+    pub sigma_px: f64,
+}
+
+impl Default for LateralNoise {
+    fn default() -> Self {
+        LateralNoise { sigma_px: 0.8 }
+    }
+}
+
+/// Where the sensor returns no depth (value 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Holes {
+    /// Minimum range, metres (default 0.4).
+    pub min_range: f64,
+    /// Maximum range where every pixel still has depth, metres (default 4.0).
+    pub max_range: f64,
+    /// The per-pixel cut-off is uniform in [max_range, max_range + max_range_spread] (default 1.0 m).
+    pub max_range_spread: f64,
+    /// Incidence angle beyond which no depth is returned, degrees (default 78).
+    pub max_incidence_deg: f64,
+    /// Probability of a hole at a depth-boundary pixel (default 0.35).
+    pub boundary_probability: f64,
+    /// A pixel is on a boundary when a 4-neighbour's depth differs by more than this fraction
+    /// of its own depth (default 0.05).
+    pub boundary_jump: f64,
+}
+
+impl Default for Holes {
+    fn default() -> Self {
+        Holes {
+            min_range: 0.4,
+            max_range: 4.0,
+            max_range_spread: 1.0,
+            max_incidence_deg: 78.0,
+            boundary_probability: 0.35,
+            boundary_jump: 0.05,
+        }
+    }
+}
+
+/// RGB-to-depth misregistration: the depth at RGB pixel (u, v) is the sensor's depth at
+/// (u + dx, v + dy) (nearest pixel).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Misregistration {
+    /// Horizontal shift, pixels (preset `boundary`: 4).
+    pub dx_px: f64,
+    /// Vertical shift, pixels (preset `boundary`: 1).
+    pub dy_px: f64,
+}
+
+/// Depth time lag (as fr2's depth / colour offset, or an unsynchronised sensor): the depth image
+/// is rendered from the camera pose and scene `frames` frames earlier, but stamped as the colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthLag {
+    /// Lag in frames, may be fractional (preset `lag`: 2).
+    pub frames: f64,
+}
+
+/// Systematic depth distortion of a miscalibrated sensor: z' = z (1 + scale_error +
+/// wobble_amplitude * (r / r_max)^2 * cos(2 pi r / wobble_period_px)), r = distance from the
+/// image centre in pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SystematicDistortion {
+    /// Relative depth scale error (preset `distorted`: 0.04, i.e. +4 %).
+    pub scale_error: f64,
+    /// Relative amplitude of the radial wobble at the image corner (preset: 0.015).
+    pub wobble_amplitude: f64,
+    /// Radial period of the wobble, pixels (preset: 180).
+    pub wobble_period_px: f64,
+}
+
+impl Default for SystematicDistortion {
+    fn default() -> Self {
+        SystematicDistortion {
+            scale_error: 0.04,
+            wobble_amplitude: 0.015,
+            wobble_period_px: 180.0,
+        }
+    }
+}
+
+/// The depth-sensor model (RGB-D only). `None` switches a component off.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DepthNoise {
+    /// Random axial noise.
+    pub axial: Option<AxialNoise>,
+    /// Disparity quantisation.
+    pub quantisation: Option<DisparityQuantisation>,
+    /// Lateral (neighbour-mixing) noise.
+    pub lateral: Option<LateralNoise>,
+    /// Missing depth.
+    pub holes: Option<Holes>,
+    /// RGB-depth misregistration.
+    pub misregistration: Option<Misregistration>,
+    /// Depth time lag.
+    pub lag: Option<DepthLag>,
+    /// Systematic (calibration) distortion.
+    pub distortion: Option<SystematicDistortion>,
+}
+
+impl DepthNoise {
+    /// The Kinect-like model: axial + quantisation + lateral + holes, all at their defaults.
+    pub fn kinect() -> Self {
+        DepthNoise {
+            axial: Some(AxialNoise::default()),
+            quantisation: Some(DisparityQuantisation::default()),
+            lateral: Some(LateralNoise::default()),
+            holes: Some(Holes::default()),
+            ..DepthNoise::default()
+        }
+    }
+}
+
+/// Independently moving textured objects ("people", like fr3_walking).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovingObjects {
+    /// How many (1..=3; default 2).
+    pub count: usize,
+    /// Walking speed multiplier (default 1; 1 is about 0.4-0.6 m/s).
+    pub speed: f64,
+}
+
+impl Default for MovingObjects {
+    fn default() -> Self {
+        MovingObjects {
+            count: 2,
+            speed: 1.0,
+        }
+    }
+}
+
+/// Everything that defines a sequence besides the seed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SynthConfig {
+    /// Camera (intrinsics, size, fps, sensor). `SensorKind::Rgbd` renders depth; `Stereo`
+    /// renders a right image at baseline `bf / fx` instead. Default: `Camera::tum_fr3()`.
+    pub camera: Camera,
+    /// Camera path (default `Xyz`).
+    pub trajectory: Trajectory,
+    /// Time scale of the camera motion: 2 moves twice as fast per frame (default 1).
+    pub motion_scale: f64,
+    /// Image formation.
+    pub image: ImageConfig,
+    /// Depth-sensor model (ignored for stereo).
+    pub depth_noise: DepthNoise,
+    /// Moving objects, off by default.
+    pub moving_objects: Option<MovingObjects>,
+    /// Frames `[start, start + n)` fully covered by a flat featureless surface 0.5 m in front of
+    /// the camera (as a hand over the lens), for relocalisation tests. Off by default.
+    pub occlusion: Option<(usize, usize)>,
+}
+
+impl Default for SynthConfig {
+    fn default() -> Self {
+        SynthConfig {
+            camera: Camera::tum_fr3(),
+            trajectory: Trajectory::Xyz,
+            motion_scale: 1.0,
+            image: ImageConfig::default(),
+            depth_noise: DepthNoise::default(),
+            moving_objects: None,
+            occlusion: None,
+        }
+    }
+}
+
+/// The stereo camera of the `stereo` preset: EuRoC-like 752x480 rectified pinhole, baseline
+/// 0.11 m, ThDepth 35, 30 Hz.
+pub fn stereo_camera() -> Camera {
+    let fx = 458.0;
+    Camera {
+        fx,
+        fy: 458.0,
+        cx: 375.5,
+        cy: 239.5,
+        width: 752,
+        height: 480,
+        distortion: None,
+        bf: fx * 0.11,
+        th_depth: 35.0,
+        fps: 30.0,
+        sensor: SensorKind::Stereo,
+    }
+}
+
+/// Named presets, from easy to hard; each is named after the effect it models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// No noise at all: exact depth, noiseless images.
+    Clean,
+    /// Kinect v1 model: axial + disparity quantisation + lateral 0.8 px + holes; image noise 2.
+    Kinect,
+    /// Kinect plus strong lateral mixing (2.5 px) and 4 px RGB-depth misregistration.
+    Boundary,
+    /// Kinect plus two walking "people" covering 20-40 % of the view (fr3_walking-like).
+    Walking,
+    /// Rectified stereo pair, baseline 0.11 m, 752x480, no depth image.
+    Stereo,
+    /// Kinect plus a systematic depth error (+4 % scale, 1.5 % radial wobble).
+    Distorted,
+    /// Kinect plus a 2-frame depth lag and 1.5x faster motion.
+    Lag,
+    /// Everything that breaks a baseline: walking people, systematic distortion, lag, fast motion.
+    Hard,
+    /// Kinect with frames 120..150 covered by a featureless surface (relocalisation).
+    Occluded,
+}
+
+const PRESETS: [(Preset, &str); 9] = [
+    (Preset::Clean, "clean"),
+    (Preset::Kinect, "kinect"),
+    (Preset::Boundary, "boundary"),
+    (Preset::Walking, "walking"),
+    (Preset::Stereo, "stereo"),
+    (Preset::Distorted, "distorted"),
+    (Preset::Lag, "lag"),
+    (Preset::Hard, "hard"),
+    (Preset::Occluded, "occluded"),
+];
+
+const PRESET_NAMES: [&str; 9] = [
+    "clean",
+    "kinect",
+    "boundary",
+    "walking",
+    "stereo",
+    "distorted",
+    "lag",
+    "hard",
+    "occluded",
+];
+
+/// Names of all presets, easy to hard.
+pub fn preset_names() -> &'static [&'static str] {
+    &PRESET_NAMES
+}
+
+impl Preset {
+    /// All presets, easy to hard.
+    pub fn all() -> impl Iterator<Item = Preset> {
+        PRESETS.iter().map(|(p, _)| *p)
+    }
+
+    /// The preset's name.
+    pub fn name(&self) -> &'static str {
+        PRESETS
+            .iter()
+            .find(|(p, _)| p == self)
+            .map(|(_, n)| *n)
+            .unwrap_or("?")
+    }
+
+    /// Looks a preset up by name; the error lists the valid names.
+    pub fn from_name(name: &str) -> Result<Preset, SynthError> {
+        PRESETS
+            .iter()
+            .find(|(_, n)| *n == name)
+            .map(|(p, _)| *p)
+            .ok_or_else(|| SynthError::UnknownName {
+                what: "preset",
+                name: name.to_string(),
+                valid: PRESET_NAMES.join(", "),
+            })
+    }
+
+    /// The configuration of this preset.
+    pub fn config(&self) -> SynthConfig {
+        let kinect = SynthConfig {
+            depth_noise: DepthNoise::kinect(),
+            ..SynthConfig::default()
+        };
+        match self {
+            Preset::Clean => SynthConfig {
+                image: ImageConfig {
+                    noise_sigma: 0.0,
+                    ..ImageConfig::default()
+                },
+                ..SynthConfig::default()
+            },
+            Preset::Kinect => kinect,
+            Preset::Boundary => {
+                let mut c = kinect;
+                c.depth_noise.lateral = Some(LateralNoise { sigma_px: 2.5 });
+                c.depth_noise.misregistration = Some(Misregistration {
+                    dx_px: 4.0,
+                    dy_px: 1.0,
+                });
+                c
+            }
+            Preset::Walking => SynthConfig {
+                moving_objects: Some(MovingObjects::default()),
+                ..kinect
+            },
+            Preset::Stereo => SynthConfig {
+                camera: stereo_camera(),
+                ..SynthConfig::default()
+            },
+            Preset::Distorted => {
+                let mut c = kinect;
+                c.depth_noise.distortion = Some(SystematicDistortion::default());
+                c
+            }
+            Preset::Lag => {
+                let mut c = kinect;
+                c.depth_noise.lag = Some(DepthLag { frames: 2.0 });
+                c.motion_scale = 1.5;
+                c
+            }
+            Preset::Hard => {
+                let mut c = kinect;
+                c.moving_objects = Some(MovingObjects::default());
+                c.depth_noise.distortion = Some(SystematicDistortion::default());
+                c.depth_noise.lag = Some(DepthLag { frames: 2.0 });
+                c.motion_scale = 1.5;
+                c
+            }
+            Preset::Occluded => SynthConfig {
+                occlusion: Some((120, 30)),
+                ..kinect
+            },
+        }
+    }
+}
+
+impl fmt::Display for Preset {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl SynthConfig {
+    /// The configuration of the preset called `name`; the error lists the valid names.
+    pub fn preset(name: &str) -> Result<SynthConfig, SynthError> {
+        Ok(Preset::from_name(name)?.config())
+    }
+
+    /// Whether this configuration renders a depth image (RGB-D) rather than a right image.
+    pub fn is_rgbd(&self) -> bool {
+        self.camera.sensor == SensorKind::Rgbd
+    }
+
+    /// Checks the values a user can get wrong (sizes, rates, ranges).
+    pub fn validate(&self) -> Result<(), SynthError> {
+        let bad = |m: &str| Err(SynthError::InvalidConfig(m.to_string()));
+        let c = &self.camera;
+        if c.width < 16 || c.height < 16 || c.width > 8192 || c.height > 8192 {
+            return bad("image size must be within 16..8192 pixels");
+        }
+        if !(c.fx > 0.0 && c.fy > 0.0 && c.fps > 0.0) {
+            return bad("fx, fy and fps must be positive");
+        }
+        if c.sensor == SensorKind::Stereo && c.bf <= 0.0 {
+            return bad("stereo needs a positive bf");
+        }
+        if !(self.motion_scale.is_finite() && self.motion_scale >= 0.0) {
+            return bad("motion_scale must be finite and >= 0");
+        }
+        if self.image.noise_sigma.is_nan() || self.image.noise_sigma < 0.0 {
+            return bad("image noise sigma must be >= 0");
+        }
+        if let Supersampling::Grid(n) = self.image.supersampling {
+            if !(2..=8).contains(&n) {
+                return bad("grid supersampling must be 2..=8");
+            }
+        }
+        if let Some(m) = &self.moving_objects {
+            if !(1..=3).contains(&m.count) {
+                return bad("moving object count must be 1..=3");
+            }
+        }
+        if let Some(l) = &self.depth_noise.lateral {
+            if !(0.0..=10.0).contains(&l.sigma_px) {
+                return bad("lateral sigma must be within 0..10 px");
+            }
+        }
+        if let Some(m) = &self.depth_noise.misregistration {
+            if m.dx_px.abs() > 64.0 || m.dy_px.abs() > 64.0 {
+                return bad("misregistration must be within 64 px");
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_name_round_trips_and_validates() {
+        for name in preset_names() {
+            let p = Preset::from_name(name).unwrap();
+            assert_eq!(p.name(), *name);
+            p.config().validate().unwrap();
+        }
+        assert_eq!(Preset::all().count(), preset_names().len());
+    }
+
+    #[test]
+    fn unknown_preset_lists_valid_names() {
+        let e = SynthConfig::preset("noisy").unwrap_err().to_string();
+        assert!(
+            e.contains("noisy") && e.contains("kinect") && e.contains("walking"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn stereo_preset_has_no_depth_and_11cm_baseline() {
+        let c = SynthConfig::preset("stereo").unwrap();
+        assert!(!c.is_rgbd());
+        assert!((c.camera.baseline() - 0.11).abs() < 1e-12);
+    }
+
+    #[test]
+    fn axial_sigma_matches_nguyen() {
+        let a = AxialNoise {
+            grazing: false,
+            ..AxialNoise::default()
+        };
+        assert!((a.sigma(1.0, 0.0) - (0.0012 + 0.0019 * 0.36)).abs() < 1e-12);
+        let g = AxialNoise::default();
+        assert!(g.sigma(2.0, 1.3) > a.sigma(2.0, 1.3) + 0.001);
+    }
+}

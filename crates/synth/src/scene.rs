@@ -1,0 +1,569 @@
+//! The indoor scene: a textured room (floor, ceiling, four walls), a table with legs, boxes,
+//! a monitor panel and cylinders standing in front of each other (so depth boundaries are
+//! common, the paper's Fig. 2), and optional walking "people" (textured boxes / cylinders).
+//!
+//! World frame: x, y horizontal, z up, metres; the room spans x, y in [-2.5, 2.5], z in [0, 2.7].
+//! The layout is fixed (so every trajectory sees textured content within sensor range); the
+//! textures are drawn from a `ChaCha8Rng` seeded with the sequence seed.
+
+use nalgebra::Vector3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::config::MovingObjects;
+use crate::texture::{Style, Texture};
+
+/// Half extents of the room along x and y, metres.
+pub const ROOM_HALF: f64 = 2.5;
+/// Height of the room (ceiling), metres.
+pub const ROOM_HEIGHT: f64 = 2.7;
+/// Object id of the featureless occluder of the occlusion window.
+pub const OCCLUDER_ID: u16 = u16::MAX;
+/// Object ids at or above this (and below [`OCCLUDER_ID`]) are moving objects.
+pub const MOVING_ID_BASE: u16 = 1000;
+
+/// The shape of an object, in its local frame (centred at the origin, z up).
+#[derive(Clone, Copy, Debug)]
+pub enum Shape {
+    /// Axis-aligned box with the given half extents (metres).
+    Cuboid {
+        /// Half extents x, y, z.
+        half: [f64; 3],
+    },
+    /// Vertical cylinder.
+    Cylinder {
+        /// Radius, metres.
+        radius: f64,
+        /// Half height, metres.
+        half_height: f64,
+    },
+}
+
+/// Back-and-forth walk of a moving object: centre(t) = centre + axis * amplitude *
+/// sin(2 pi t / period + phase) + perpendicular * sway * sin(4 pi t / period + phase).
+#[derive(Clone, Copy, Debug)]
+pub struct Walk {
+    /// Unit walking direction in the floor plane.
+    pub axis: [f64; 2],
+    /// Amplitude along the axis, metres.
+    pub amplitude: f64,
+    /// Period of one back-and-forth, seconds.
+    pub period: f64,
+    /// Phase, radians.
+    pub phase: f64,
+    /// Sideways sway amplitude, metres.
+    pub sway: f64,
+}
+
+/// A textured object of the scene.
+#[derive(Clone, Debug)]
+pub struct Object {
+    /// Geometry in the local frame.
+    pub shape: Shape,
+    /// Centre of the local frame in the world at rest, metres.
+    pub centre: [f64; 3],
+    /// Rotation about the vertical, radians.
+    pub yaw: f64,
+    /// Index into the scene's textures.
+    pub texture: usize,
+    /// Object id written into the id buffer.
+    pub id: u16,
+    /// Motion, for moving objects.
+    pub walk: Option<Walk>,
+}
+
+/// An object placed at a given time: what the ray-caster intersects.
+#[derive(Clone, Copy, Debug)]
+pub struct Placed {
+    /// Index into `Scene::objects`.
+    pub object: usize,
+    /// World position of the centre.
+    pub centre: Vector3<f64>,
+    cos_yaw: f64,
+    sin_yaw: f64,
+    /// Bounding-sphere radius.
+    pub radius: f64,
+}
+
+/// Result of a ray hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Ray parameter (for rays with unit z in camera coordinates: the z-depth), metres.
+    pub t: f64,
+    /// Unit world normal on the side the ray came from.
+    pub normal: Vector3<f64>,
+    /// Texture index.
+    pub texture: usize,
+    /// Surface coordinates for the texture, metres.
+    pub st: (f64, f64),
+    /// Object id.
+    pub id: u16,
+}
+
+/// The room, its objects and their textures.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Objects (static and moving).
+    pub objects: Vec<Object>,
+    /// Textures: six room faces first (floor, ceiling, -x, +x, -y, +y), then one per object.
+    pub textures: Vec<Texture>,
+    /// Point light position (world, metres).
+    pub light: Vector3<f64>,
+}
+
+fn cuboid(centre: [f64; 3], half: [f64; 3], yaw: f64) -> (Shape, [f64; 3], f64) {
+    (Shape::Cuboid { half }, centre, yaw)
+}
+
+fn cylinder(x: f64, y: f64, z0: f64, radius: f64, height: f64) -> (Shape, [f64; 3], f64) {
+    (
+        Shape::Cylinder {
+            radius,
+            half_height: height / 2.0,
+        },
+        [x, y, z0 + height / 2.0],
+        0.0,
+    )
+}
+
+impl Shape {
+    /// Radius of a sphere around the local origin containing the shape.
+    fn bound(&self) -> f64 {
+        match *self {
+            Shape::Cuboid { half } => {
+                (half[0] * half[0] + half[1] * half[1] + half[2] * half[2]).sqrt()
+            }
+            Shape::Cylinder {
+                radius,
+                half_height,
+            } => (radius * radius + half_height * half_height).sqrt(),
+        }
+    }
+
+    /// Metric size (width, height) of a texture that covers every face without stretching.
+    fn texture_size(&self) -> (f64, f64) {
+        match *self {
+            Shape::Cuboid { half } => {
+                let m = 2.0 * half[0].max(half[1]).max(half[2]);
+                (m.max(0.3), m.max(0.3))
+            }
+            Shape::Cylinder {
+                radius,
+                half_height,
+            } => (
+                std::f64::consts::TAU * radius,
+                (2.0 * half_height).max(2.0 * radius),
+            ),
+        }
+    }
+}
+
+impl Scene {
+    /// Builds the room with textures drawn from `seed`, plus `moving` walking objects.
+    pub fn new(seed: u64, moving: Option<&MovingObjects>) -> Scene {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5CE4_E5EE_D000_0001);
+        let h = ROOM_HALF;
+        let mut textures = vec![
+            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.004, Style::Carpet),
+            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.01, Style::Poster),
+        ];
+        for _ in 0..4 {
+            textures.push(Texture::collage(
+                &mut rng,
+                2.0 * h,
+                ROOM_HEIGHT,
+                0.004,
+                Style::Poster,
+            ));
+        }
+        let table_top = 0.75;
+        let mut statics = vec![
+            // Table top and legs.
+            cuboid([0.0, 1.0, table_top - 0.025], [0.8, 0.45, 0.025], 0.0),
+            cuboid([-0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
+            cuboid([0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
+            cuboid([-0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
+            cuboid([0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
+            // On the table: boxes, a book, a monitor panel, a bottle and a pot.
+            cuboid([-0.45, 0.9, table_top + 0.10], [0.12, 0.09, 0.10], 0.3),
+            cuboid([0.42, 1.15, table_top + 0.17], [0.15, 0.12, 0.17], -0.4),
+            cuboid([0.05, 0.75, table_top + 0.025], [0.14, 0.10, 0.025], 0.15),
+            cuboid([-0.15, 1.36, table_top + 0.25], [0.3, 0.02, 0.2], 0.0),
+            cylinder(-0.12, 1.1, table_top, 0.045, 0.24),
+            cylinder(0.62, 0.78, table_top, 0.07, 0.18),
+            // On the floor: cabinet, boxes, a pillar, a shelf, a bin.
+            cuboid([-1.6, 1.9, 0.6], [0.45, 0.3, 0.6], 0.0),
+            cuboid([1.45, 1.55, 0.3], [0.3, 0.3, 0.3], 0.5),
+            cuboid([1.45, 1.55, 0.75], [0.2, 0.18, 0.15], 0.2),
+            cylinder(-1.3, 0.3, 0.0, 0.15, 1.8),
+            cuboid([2.0, -1.5, 0.4], [0.35, 0.25, 0.4], 0.2),
+            cuboid([-2.0, -1.2, 0.5], [0.3, 0.4, 0.5], 0.0),
+            cylinder(0.8, -2.0, 0.0, 0.2, 0.6),
+            cuboid([-0.5, -2.25, 0.8], [0.6, 0.2, 0.8], 0.0),
+            cuboid([2.2, 0.4, 1.0], [0.25, 0.6, 1.0], 0.0),
+        ];
+        let mut objects = Vec::new();
+        for (i, (shape, centre, yaw)) in statics.drain(..).enumerate() {
+            let (tw, th) = shape.texture_size();
+            let style = if i == 0 { Style::Desk } else { Style::Poster };
+            textures.push(Texture::collage(&mut rng, tw, th, 0.0025, style));
+            objects.push(Object {
+                shape,
+                centre,
+                yaw,
+                texture: textures.len() - 1,
+                id: 10 + i as u16,
+                walk: None,
+            });
+        }
+        if let Some(m) = moving {
+            let people = [
+                // In front of the table, crossing the view at about 1 m from the camera.
+                (
+                    Shape::Cylinder {
+                        radius: 0.22,
+                        half_height: 0.85,
+                    },
+                    [0.0, 0.22, 0.85],
+                    Walk {
+                        axis: [1.0, 0.0],
+                        amplitude: 0.85,
+                        period: 9.0,
+                        phase: 0.3,
+                        sway: 0.08,
+                    },
+                ),
+                // Behind the table.
+                (
+                    Shape::Cuboid {
+                        half: [0.24, 0.15, 0.85],
+                    },
+                    [0.0, 2.02, 0.85],
+                    Walk {
+                        axis: [1.0, 0.0],
+                        amplitude: 0.8,
+                        period: 7.0,
+                        phase: 2.0,
+                        sway: 0.05,
+                    },
+                ),
+                // Diagonally across, left of the table.
+                (
+                    Shape::Cuboid {
+                        half: [0.2, 0.2, 0.8],
+                    },
+                    [-1.05, 1.0, 0.8],
+                    Walk {
+                        axis: [0.3, 0.954],
+                        amplitude: 0.6,
+                        period: 11.0,
+                        phase: 4.0,
+                        sway: 0.05,
+                    },
+                ),
+            ];
+            for (k, (shape, centre, walk)) in people.iter().take(m.count).enumerate() {
+                let (tw, th) = shape.texture_size();
+                textures.push(Texture::collage(&mut rng, tw, th, 0.0025, Style::Poster));
+                objects.push(Object {
+                    shape: *shape,
+                    centre: *centre,
+                    yaw: 0.0,
+                    texture: textures.len() - 1,
+                    id: MOVING_ID_BASE + k as u16,
+                    walk: Some(Walk {
+                        period: walk.period / m.speed.max(1e-6),
+                        ..*walk
+                    }),
+                });
+            }
+        }
+        Scene {
+            objects,
+            textures,
+            light: Vector3::new(0.3, 0.0, 2.6),
+        }
+    }
+
+    /// The objects placed at time `t` seconds.
+    pub fn place(&self, t: f64) -> Vec<Placed> {
+        self.objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let mut c = Vector3::new(o.centre[0], o.centre[1], o.centre[2]);
+                if let Some(w) = &o.walk {
+                    let a = std::f64::consts::TAU * t / w.period + w.phase;
+                    let along = w.amplitude * a.sin();
+                    let side = w.sway * (2.0 * a).sin();
+                    c.x += w.axis[0] * along - w.axis[1] * side;
+                    c.y += w.axis[1] * along + w.axis[0] * side;
+                }
+                Placed {
+                    object: i,
+                    centre: c,
+                    cos_yaw: o.yaw.cos(),
+                    sin_yaw: o.yaw.sin(),
+                    radius: o.shape.bound(),
+                }
+            })
+            .collect()
+    }
+
+    /// Nearest hit of the ray o + t d (t > 0) with the room and the placed objects.
+    #[inline]
+    pub fn intersect(&self, placed: &[Placed], o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
+        let mut best = room_hit(o, d);
+        let dd = d.dot(d);
+        let inv_len = 1.0 / dd.sqrt();
+        for p in placed {
+            let oc = p.centre - o;
+            let tca = oc.dot(d) / dd;
+            let dist2 = oc.dot(&oc) - tca * tca * dd;
+            if dist2 > p.radius * p.radius || tca + p.radius * inv_len < 0.0 {
+                continue;
+            }
+            if tca - p.radius * inv_len > best.t {
+                continue;
+            }
+            let obj = &self.objects[p.object];
+            // Into the local frame: translate, then rotate by -yaw about z.
+            let (c, s) = (p.cos_yaw, p.sin_yaw);
+            let lo = Vector3::new(c * -oc.x + s * -oc.y, -s * -oc.x + c * -oc.y, -oc.z);
+            let ld = Vector3::new(c * d.x + s * d.y, -s * d.x + c * d.y, d.z);
+            let local = match obj.shape {
+                Shape::Cuboid { half } => hit_cuboid(&lo, &ld, &half),
+                Shape::Cylinder {
+                    radius,
+                    half_height,
+                } => hit_cylinder(&lo, &ld, radius, half_height),
+            };
+            if let Some((t, n, st)) = local {
+                if t < best.t {
+                    // Normal back to the world.
+                    let nw = Vector3::new(c * n.x - s * n.y, s * n.x + c * n.y, n.z);
+                    best = Hit {
+                        t,
+                        normal: nw,
+                        texture: obj.texture,
+                        st,
+                        id: obj.id,
+                    };
+                }
+            }
+        }
+        best
+    }
+
+    /// Unsigned distance (metres) from world point `q` to the nearest surface of the room or
+    /// of a placed object: an independent check of the ray-caster used by tests.
+    pub fn surface_distance(&self, placed: &[Placed], q: &Vector3<f64>) -> f64 {
+        let h = ROOM_HALF;
+        let mut best = (q.x + h)
+            .abs()
+            .min((h - q.x).abs())
+            .min((q.y + h).abs())
+            .min((h - q.y).abs())
+            .min(q.z.abs())
+            .min((ROOM_HEIGHT - q.z).abs());
+        for p in placed {
+            let r = q - p.centre;
+            let (c, s) = (p.cos_yaw, p.sin_yaw);
+            let l = Vector3::new(c * r.x + s * r.y, -s * r.x + c * r.y, r.z);
+            let sdf = match self.objects[p.object].shape {
+                Shape::Cuboid { half } => {
+                    let d = Vector3::new(
+                        l.x.abs() - half[0],
+                        l.y.abs() - half[1],
+                        l.z.abs() - half[2],
+                    );
+                    let outside = Vector3::new(d.x.max(0.0), d.y.max(0.0), d.z.max(0.0)).norm();
+                    outside + d.x.max(d.y).max(d.z).min(0.0)
+                }
+                Shape::Cylinder {
+                    radius,
+                    half_height,
+                } => {
+                    let dr = (l.x * l.x + l.y * l.y).sqrt() - radius;
+                    let dz = l.z.abs() - half_height;
+                    let outside = (dr.max(0.0).powi(2) + dz.max(0.0).powi(2)).sqrt();
+                    outside + dr.max(dz).min(0.0)
+                }
+            };
+            best = best.min(sdf.abs());
+        }
+        best
+    }
+}
+
+/// Exit of the ray from the inside of the room box.
+#[inline]
+fn room_hit(o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
+    let h = ROOM_HALF;
+    let lo = [-h, -h, 0.0];
+    let hi = [h, h, ROOM_HEIGHT];
+    let mut best_t = f64::INFINITY;
+    let mut face = 0usize;
+    for a in 0..3 {
+        if d[a] > 0.0 {
+            let t = (hi[a] - o[a]) / d[a];
+            if t < best_t {
+                best_t = t;
+                face = 2 * a + 1;
+            }
+        } else if d[a] < 0.0 {
+            let t = (lo[a] - o[a]) / d[a];
+            if t < best_t {
+                best_t = t;
+                face = 2 * a;
+            }
+        }
+    }
+    let p = o + d * best_t;
+    // face: 0 -x, 1 +x, 2 -y, 3 +y, 4 floor, 5 ceiling.
+    let (normal, texture, st) = match face {
+        0 => (Vector3::x(), 2, (p.y + h, p.z)),
+        1 => (-Vector3::x(), 3, (h - p.y, p.z)),
+        2 => (Vector3::y(), 4, (h - p.x, p.z)),
+        3 => (-Vector3::y(), 5, (p.x + h, p.z)),
+        4 => (Vector3::z(), 0, (p.x + h, p.y + h)),
+        _ => (-Vector3::z(), 1, (p.x + h, p.y + h)),
+    };
+    Hit {
+        t: best_t,
+        normal,
+        texture,
+        st,
+        id: 1 + face as u16,
+    }
+}
+
+/// Ray / box slab test in the box's local frame; entry hit only (the camera is never inside).
+#[inline]
+fn hit_cuboid(
+    o: &Vector3<f64>,
+    d: &Vector3<f64>,
+    half: &[f64; 3],
+) -> Option<(f64, Vector3<f64>, (f64, f64))> {
+    let mut t_near = f64::NEG_INFINITY;
+    let mut t_far = f64::INFINITY;
+    let mut axis = 0;
+    for a in 0..3 {
+        if d[a].abs() < 1e-15 {
+            if o[a].abs() > half[a] {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / d[a];
+        let mut t0 = (-half[a] - o[a]) * inv;
+        let mut t1 = (half[a] - o[a]) * inv;
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        if t0 > t_near {
+            t_near = t0;
+            axis = a;
+        }
+        t_far = t_far.min(t1);
+    }
+    if t_near > t_far || t_near <= 1e-9 {
+        return None;
+    }
+    let p = o + d * t_near;
+    let sign = if d[axis] > 0.0 { -1.0 } else { 1.0 };
+    let mut n = Vector3::zeros();
+    n[axis] = sign;
+    // Face coordinates, shifted per face so that faces do not repeat each other.
+    let face = (2 * axis + (sign > 0.0) as usize) as f64;
+    let (u, v) = match axis {
+        0 => (p.y + half[1], p.z + half[2]),
+        1 => (p.x + half[0], p.z + half[2]),
+        _ => (p.x + half[0], p.y + half[1]),
+    };
+    Some((t_near, n, (u + 0.37 * face, v + 0.23 * face)))
+}
+
+/// Ray / vertical cylinder (with caps) in the cylinder's local frame.
+#[inline]
+fn hit_cylinder(
+    o: &Vector3<f64>,
+    d: &Vector3<f64>,
+    r: f64,
+    hh: f64,
+) -> Option<(f64, Vector3<f64>, (f64, f64))> {
+    let mut best: Option<(f64, Vector3<f64>, (f64, f64))> = None;
+    let a = d.x * d.x + d.y * d.y;
+    if a > 1e-15 {
+        let b = o.x * d.x + o.y * d.y;
+        let c = o.x * o.x + o.y * o.y - r * r;
+        let disc = b * b - a * c;
+        if disc >= 0.0 {
+            let t = (-b - disc.sqrt()) / a;
+            if t > 1e-9 {
+                let p = o + d * t;
+                if p.z.abs() <= hh {
+                    let ang = p.y.atan2(p.x);
+                    best = Some((
+                        t,
+                        Vector3::new(p.x / r, p.y / r, 0.0),
+                        ((ang + std::f64::consts::PI) * r, p.z + hh),
+                    ));
+                }
+            }
+        }
+    }
+    if d.z.abs() > 1e-15 {
+        let zc = if d.z < 0.0 { hh } else { -hh };
+        let t = (zc - o.z) / d.z;
+        if t > 1e-9 && best.is_none_or(|b| t < b.0) {
+            let p = o + d * t;
+            if p.x * p.x + p.y * p.y <= r * r {
+                best = Some((
+                    t,
+                    Vector3::new(0.0, 0.0, zc.signum()),
+                    (p.x + r + 0.31, p.y + r + 0.17),
+                ));
+            }
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ray_hits_lie_on_surfaces() {
+        let scene = Scene::new(3, Some(&MovingObjects::default()));
+        let placed = scene.place(1.3);
+        let o = Vector3::new(0.1, -0.6, 1.4);
+        let mut n_obj = 0;
+        for i in 0..400 {
+            let a = i as f64 * 0.7;
+            let d = Vector3::new(a.cos() * 0.8, 1.0, (a * 1.3).sin() * 0.7 - 0.3);
+            let h = scene.intersect(&placed, &o, &d);
+            let p = o + d * h.t;
+            assert!(scene.surface_distance(&placed, &p) < 1e-9, "ray {i}");
+            assert!(h.normal.dot(&d) <= 1e-12, "normal faces the ray");
+            n_obj += (h.id >= 10) as usize;
+        }
+        assert!(n_obj > 50, "objects are in front of the camera: {n_obj}");
+    }
+
+    #[test]
+    fn moving_objects_move_and_statics_stay() {
+        let scene = Scene::new(1, Some(&MovingObjects::default()));
+        let a = scene.place(0.0);
+        let b = scene.place(1.0);
+        for (pa, pb) in a.iter().zip(&b) {
+            let moved = (pa.centre - pb.centre).norm();
+            if scene.objects[pa.object].walk.is_some() {
+                assert!(moved > 0.1);
+            } else {
+                assert_eq!(moved, 0.0);
+            }
+        }
+    }
+}

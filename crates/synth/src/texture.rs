@@ -1,0 +1,409 @@
+//! Procedural textures rich in corners at several scales: collages of random rectangles,
+//! triangles, discs and text-like glyph blocks over a patchwork background, rasterised once per
+//! surface (metric texel size) and sampled bilinearly at render time.
+//!
+//! Nothing is periodic: every shape's position, size, angle and colour is drawn from the scene
+//! RNG, so ORB descriptors stay distinctive. Shapes are drawn from large to small, so small
+//! high-contrast corners sit on top of large ones and every pyramid level finds structure.
+
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+
+/// Look of a surface's collage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Style {
+    /// Posters, shapes and text on a patchwork: walls, boxes, clothes.
+    Poster,
+    /// Carpet-like patchwork of random tiles with scattered shapes: floors.
+    Carpet,
+    /// Wood-like streaks with papers and text on top: the table.
+    Desk,
+}
+
+/// An RGB texture covering `width_m` x `height_m` metres of a surface.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    w: usize,
+    h: usize,
+    /// Texels per metre.
+    scale: f64,
+    data: Vec<[u8; 3]>,
+}
+
+/// A random colour whose luminance lies in one of three well-separated bands, so that two
+/// neighbouring shapes usually differ by 60+ grey levels.
+fn random_colour(rng: &mut ChaCha8Rng) -> [u8; 3] {
+    let band = rng.random_range(0..3);
+    let lum: f64 = match band {
+        0 => rng.random_range(15.0..70.0),
+        1 => rng.random_range(105.0..155.0),
+        _ => rng.random_range(190.0..250.0),
+    };
+    let sat: f64 = rng.random_range(0.0..0.6);
+    let hue: [f64; 3] = [
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+    ];
+    // Remove the hue's luminance so the colour keeps its band.
+    let hl = 0.299 * hue[0] + 0.587 * hue[1] + 0.114 * hue[2];
+    let amp = sat * lum.min(255.0 - lum).max(20.0);
+    let c = |i: usize| (lum + amp * (hue[i] - hl)).clamp(0.0, 255.0) as u8;
+    [c(0), c(1), c(2)]
+}
+
+impl Texture {
+    /// Rasterises a new collage texture of the given metric size and texel size (metres).
+    pub fn collage(
+        rng: &mut ChaCha8Rng,
+        width_m: f64,
+        height_m: f64,
+        texel_m: f64,
+        style: Style,
+    ) -> Texture {
+        let scale = 1.0 / texel_m;
+        let w = ((width_m * scale).ceil() as usize).max(4);
+        let h = ((height_m * scale).ceil() as usize).max(4);
+        let mut t = Texture {
+            w,
+            h,
+            scale,
+            data: vec![random_colour(rng); w * h],
+        };
+        let (wm, hm) = (w as f64 / scale, h as f64 / scale);
+        match style {
+            Style::Carpet => {
+                t.patchwork(rng, 0.0, 0.0, wm, hm, 0.08, 0.6);
+                t.scatter(
+                    rng,
+                    wm,
+                    hm,
+                    &[(0.2, 0.3), (0.1, 0.25), (0.05, 0.15)],
+                    0.0,
+                    texel_m,
+                );
+            }
+            Style::Poster => {
+                t.patchwork(rng, 0.0, 0.0, wm, hm, 0.3, 1.2);
+                let scales = [
+                    (0.45, 0.4),
+                    (0.22, 0.35),
+                    (0.11, 0.3),
+                    (0.055, 0.2),
+                    (0.028, 0.1),
+                ];
+                t.scatter(rng, wm, hm, &scales, 0.15, texel_m);
+            }
+            Style::Desk => {
+                t.streaks(rng, wm, hm);
+                let scales = [(0.2, 0.3), (0.1, 0.25), (0.05, 0.2), (0.025, 0.1)];
+                t.scatter(rng, wm, hm, &scales, 0.25, texel_m);
+            }
+        }
+        t
+    }
+
+    /// Width and height in metres.
+    pub fn size_m(&self) -> (f64, f64) {
+        (self.w as f64 / self.scale, self.h as f64 / self.scale)
+    }
+
+    /// Bilinear colour (0..255 floats) at surface coordinates (s, t) in metres; wraps around.
+    #[inline]
+    pub fn sample(&self, s: f64, t: f64) -> [f32; 3] {
+        let x = s * self.scale - 0.5;
+        let y = t * self.scale - 0.5;
+        let xf = x.floor();
+        let yf = y.floor();
+        let fx = (x - xf) as f32;
+        let fy = (y - yf) as f32;
+        let x0 = (xf as i64).rem_euclid(self.w as i64) as usize;
+        let y0 = (yf as i64).rem_euclid(self.h as i64) as usize;
+        let x1 = if x0 + 1 == self.w { 0 } else { x0 + 1 };
+        let y1 = if y0 + 1 == self.h { 0 } else { y0 + 1 };
+        let a = self.data[y0 * self.w + x0];
+        let b = self.data[y0 * self.w + x1];
+        let c = self.data[y1 * self.w + x0];
+        let d = self.data[y1 * self.w + x1];
+        let mut out = [0.0f32; 3];
+        for i in 0..3 {
+            let top = a[i] as f32 + (b[i] as f32 - a[i] as f32) * fx;
+            let bot = c[i] as f32 + (d[i] as f32 - c[i] as f32) * fx;
+            out[i] = top + (bot - top) * fy;
+        }
+        out
+    }
+
+    /// Recursive random split of a rectangle into tiles between `min` and `max` metres wide,
+    /// each a random colour: a non-periodic "checker".
+    #[allow(clippy::too_many_arguments)]
+    fn patchwork(
+        &mut self,
+        rng: &mut ChaCha8Rng,
+        x: f64,
+        y: f64,
+        w: f64,
+        h: f64,
+        min: f64,
+        max: f64,
+    ) {
+        let split_x = w > max || (w > 2.0 * min && rng.random_bool(0.5) && w >= h);
+        let split_y = h > max || (h > 2.0 * min && rng.random_bool(0.5));
+        if split_x && w > 2.0 * min {
+            let f = rng.random_range(0.3..0.7);
+            self.patchwork(rng, x, y, w * f, h, min, max);
+            self.patchwork(rng, x + w * f, y, w * (1.0 - f), h, min, max);
+        } else if split_y && h > 2.0 * min {
+            let f = rng.random_range(0.3..0.7);
+            self.patchwork(rng, x, y, w, h * f, min, max);
+            self.patchwork(rng, x, y + h * f, w, h * (1.0 - f), min, max);
+        } else {
+            let c = random_colour(rng);
+            self.fill_rect(x, y, x + w, y + h, c);
+        }
+    }
+
+    /// Wood-like streaks: thin random horizontal bands of nearby brown tones.
+    fn streaks(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64) {
+        let mut y = 0.0;
+        while y < hm {
+            let th = rng.random_range(0.004..0.03);
+            let l: f64 = rng.random_range(90.0..170.0);
+            let c = [
+                (l * 1.25).min(255.0) as u8,
+                (l * 0.95) as u8,
+                (l * 0.6) as u8,
+            ];
+            self.fill_rect(0.0, y, wm, y + th, c);
+            y += th;
+        }
+    }
+
+    /// Random shapes at the given (scale, coverage) pairs (metres, large first; coverage is the
+    /// painted area as a fraction of the surface); `text` is the share of glyph blocks among
+    /// shapes large enough to carry legible glyphs (5 texels high).
+    fn scatter(
+        &mut self,
+        rng: &mut ChaCha8Rng,
+        wm: f64,
+        hm: f64,
+        scales: &[(f64, f64)],
+        text: f64,
+        texel: f64,
+    ) {
+        for &(s, coverage) in scales {
+            let n = (coverage * wm * hm / (s * s)).ceil() as usize;
+            let text = if s * 0.08 >= 5.0 * texel { text } else { 0.0 };
+            for _ in 0..n {
+                let size = s * rng.random_range(0.6..1.6);
+                let cx = rng.random_range(0.0..wm);
+                let cy = rng.random_range(0.0..hm);
+                let colour = random_colour(rng);
+                let kind = if rng.random_bool(text) {
+                    4
+                } else {
+                    rng.random_range(0..4)
+                };
+                match kind {
+                    0 | 1 => {
+                        // Rectangle, axis-aligned half the time, otherwise rotated.
+                        let a = if kind == 0 {
+                            0.0
+                        } else {
+                            rng.random_range(0.0..std::f64::consts::PI)
+                        };
+                        let ar = rng.random_range(0.3..1.0);
+                        let (hw, hh) = (size * 0.5, size * 0.5 * ar);
+                        let (ca, sa) = (a.cos(), a.sin());
+                        let p = |x: f64, y: f64| (cx + ca * x - sa * y, cy + sa * x + ca * y);
+                        if kind == 0 {
+                            self.fill_rect(cx - hw, cy - hh, cx + hw, cy + hh, colour);
+                        } else {
+                            self.fill_polygon(
+                                &[p(-hw, -hh), p(hw, -hh), p(hw, hh), p(-hw, hh)],
+                                colour,
+                            );
+                        }
+                    }
+                    2 => {
+                        let mut pts = [(0.0, 0.0); 3];
+                        let a0 = rng.random_range(0.0..std::f64::consts::TAU);
+                        for (i, q) in pts.iter_mut().enumerate() {
+                            let a = a0 + i as f64 * 2.1 + rng.random_range(-0.4..0.4);
+                            let r = size * rng.random_range(0.35..0.6);
+                            *q = (cx + r * a.cos(), cy + r * a.sin());
+                        }
+                        self.fill_polygon(&pts, colour);
+                    }
+                    3 => self.fill_disc(cx, cy, size * 0.4, colour),
+                    _ => self.text_block(rng, cx, cy, size, 5.0 * texel),
+                }
+            }
+        }
+    }
+
+    /// A light "paper" with lines of random blocky glyphs (3x5 cells) in a dark ink.
+    fn text_block(&mut self, rng: &mut ChaCha8Rng, x0: f64, y0: f64, size: f64, min_h: f64) {
+        let glyph_h = (size * rng.random_range(0.08..0.16)).max(min_h);
+        let glyph_w = glyph_h * 0.6;
+        let cols = rng.random_range(6..18);
+        let lines = rng.random_range(2..7);
+        let pw = cols as f64 * glyph_w * 1.3 + glyph_w;
+        let ph = lines as f64 * glyph_h * 1.6 + glyph_h;
+        let paper = [
+            rng.random_range(215..=255),
+            rng.random_range(215..=255),
+            rng.random_range(200..=250),
+        ];
+        self.fill_rect(x0, y0, x0 + pw, y0 + ph, paper);
+        let ink_l: f64 = rng.random_range(10.0..70.0);
+        let ink = [
+            ink_l as u8,
+            (ink_l * 0.9) as u8,
+            (ink_l * 1.3).min(255.0) as u8,
+        ];
+        let cw = glyph_w / 3.0;
+        let ch = glyph_h / 5.0;
+        for line in 0..lines {
+            let gy = y0 + glyph_h * 0.5 + line as f64 * glyph_h * 1.6;
+            let len = rng.random_range(cols / 2..=cols);
+            for col in 0..len {
+                if rng.random_bool(0.15) {
+                    continue; // word gap
+                }
+                let gx = x0 + glyph_w * 0.5 + col as f64 * glyph_w * 1.3;
+                let mut bits: u16 = rng.random_range(1..(1 << 15));
+                if bits.count_ones() < 4 {
+                    bits |= 0b010_010_010_010_010;
+                }
+                for k in 0..15 {
+                    if bits & (1 << k) != 0 {
+                        let (cx, cy) = ((k % 3) as f64, (k / 3) as f64);
+                        let (ax, ay) = (gx + cx * cw, gy + cy * ch);
+                        self.fill_rect(ax, ay, ax + cw, ay + ch, ink);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Fills the axis-aligned rectangle [x0, x1) x [y0, y1) given in metres (wraps).
+    fn fill_rect(&mut self, x0: f64, y0: f64, x1: f64, y1: f64, c: [u8; 3]) {
+        let s = self.scale;
+        let (tx0, tx1) = ((x0 * s - 0.5).ceil() as i64, (x1 * s - 0.5).ceil() as i64);
+        let (ty0, ty1) = ((y0 * s - 0.5).ceil() as i64, (y1 * s - 0.5).ceil() as i64);
+        for ty in ty0..ty1 {
+            let y = ty.rem_euclid(self.h as i64) as usize;
+            for tx in tx0..tx1 {
+                let x = tx.rem_euclid(self.w as i64) as usize;
+                self.data[y * self.w + x] = c;
+            }
+        }
+    }
+
+    /// Fills a convex polygon (at most 4 vertices) given in metres (texel centres inside are
+    /// painted; wraps).
+    fn fill_polygon(&mut self, pts: &[(f64, f64)], c: [u8; 3]) {
+        let s = self.scale;
+        let mut buf = [(0.0, 0.0); 4];
+        let n = pts.len().min(4);
+        for (b, &(x, y)) in buf.iter_mut().zip(pts) {
+            *b = (x * s, y * s);
+        }
+        let p = &buf[..n];
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for &(x, y) in p {
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        }
+        // Orientation so that "inside" is the same sign for every edge.
+        let mut area = 0.0;
+        for i in 0..n {
+            let (a, b) = (p[i], p[(i + 1) % n]);
+            area += a.0 * b.1 - b.0 * a.1;
+        }
+        let sign = if area >= 0.0 { 1.0 } else { -1.0 };
+        for ty in (y0.floor() as i64)..=(y1.ceil() as i64) {
+            let py = ty as f64 + 0.5;
+            for tx in (x0.floor() as i64)..=(x1.ceil() as i64) {
+                let px = tx as f64 + 0.5;
+                let inside = (0..n).all(|i| {
+                    let (a, b) = (p[i], p[(i + 1) % n]);
+                    sign * ((b.0 - a.0) * (py - a.1) - (b.1 - a.1) * (px - a.0)) >= 0.0
+                });
+                if inside {
+                    self.put(tx, ty, c);
+                }
+            }
+        }
+    }
+
+    /// Fills a disc of radius `r` metres centred at (cx, cy) metres.
+    fn fill_disc(&mut self, cx: f64, cy: f64, r: f64, c: [u8; 3]) {
+        let s = self.scale;
+        let (cx, cy, r) = (cx * s, cy * s, r * s);
+        for ty in ((cy - r).floor() as i64)..=((cy + r).ceil() as i64) {
+            for tx in ((cx - r).floor() as i64)..=((cx + r).ceil() as i64) {
+                let (dx, dy) = (tx as f64 + 0.5 - cx, ty as f64 + 0.5 - cy);
+                if dx * dx + dy * dy <= r * r {
+                    self.put(tx, ty, c);
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn put(&mut self, x: i64, y: i64, c: [u8; 3]) {
+        let x = x.rem_euclid(self.w as i64) as usize;
+        let y = y.rem_euclid(self.h as i64) as usize;
+        self.data[y * self.w + x] = c;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    #[test]
+    fn collage_has_contrast_everywhere() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let t = Texture::collage(&mut rng, 1.0, 1.0, 0.004, Style::Poster);
+        // Nearly every 10 cm x 10 cm patch has at least 60 grey levels of contrast.
+        let mut rich = 0;
+        for by in 0..10 {
+            for bx in 0..10 {
+                let (mut lo, mut hi) = (255.0f32, 0.0f32);
+                for j in 0..25 {
+                    for i in 0..25 {
+                        let c = t.sample(
+                            bx as f64 * 0.1 + i as f64 * 0.004,
+                            by as f64 * 0.1 + j as f64 * 0.004,
+                        );
+                        let l = 0.299 * c[0] + 0.587 * c[1] + 0.114 * c[2];
+                        lo = lo.min(l);
+                        hi = hi.max(l);
+                    }
+                }
+                rich += (hi - lo > 60.0) as usize;
+            }
+        }
+        assert!(rich >= 85, "{rich} of 100 patches have contrast");
+    }
+
+    #[test]
+    fn bilinear_sample_interpolates_between_texels() {
+        let mut t = Texture {
+            w: 2,
+            h: 1,
+            scale: 1.0,
+            data: vec![[0, 0, 0], [200, 100, 50]],
+        };
+        assert_eq!(t.sample(0.5, 0.5), [0.0, 0.0, 0.0]);
+        assert_eq!(t.sample(1.0, 0.5), [100.0, 50.0, 25.0]);
+        t.put(-1, 0, [10, 10, 10]);
+        assert_eq!(t.data[1], [10, 10, 10]);
+    }
+}

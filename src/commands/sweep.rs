@@ -1,0 +1,350 @@
+//! `noisefree sweep`: sequences x configurations x parameter grids x n seeds, run in parallel
+//! (one thread per run), each finished run appended to `<out>/runs.csv` at once, resumable,
+//! and shardable over a cluster's job array.
+
+use crate::config_file::{base_config, overlay_file};
+use crate::runner::run_sequence;
+use crate::select::{load, LoadOptions, Source};
+use crate::sweep::plan::{expand, parse_values, ConfigKind, Grids, Job, Shard};
+use crate::sweep::store::{RunRecord, RunStore};
+use anyhow::{bail, Context, Result};
+use ate_eval::io::{write_atomic, write_tum};
+use datasets::{Catalog, Class, EntryFormat};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use slam_core::system::Config;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `noisefree sweep`.
+#[derive(clap::Args, Debug)]
+pub struct SweepArgs {
+    /// Catalogued sequences or synthetic presets, comma-separated or repeated (`fr3_w_rpy,walking`).
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub seq: Vec<String>,
+    /// TUM RGB-D / EuRoC folders (repeatable).
+    #[arg(long, value_name = "DIR")]
+    pub path: Vec<PathBuf>,
+    /// Every catalogued real sequence of the paper's class `easy` or `hard`.
+    #[arg(long, value_name = "easy|hard")]
+    pub class: Option<String>,
+    /// Every TUM RGB-D sequence of Table III.
+    #[arg(long = "all-tum")]
+    pub all_tum: bool,
+    /// Every EuRoC sequence of Table III.
+    #[arg(long = "all-euroc")]
+    pub all_euroc: bool,
+    /// Every synthetic preset of the catalog.
+    #[arg(long = "all-synthetic")]
+    pub all_synthetic: bool,
+    /// Configurations: orb, mcor, avc, mcor+avc (comma-separated).
+    #[arg(long, default_value = "orb,mcor,avc,mcor+avc", value_name = "LIST")]
+    pub configs: String,
+    /// MC-OR tau_MF values in metres: a list `0.1,0.3` or a range `start:stop:step`.
+    #[arg(long = "tau-mf", default_value = "0.7", value_name = "VALUES")]
+    pub tau_mf: String,
+    /// MC-OR tau_GF values in metres.
+    #[arg(long = "tau-gf", default_value = "0.7", value_name = "VALUES")]
+    pub tau_gf: String,
+    /// MC-OR tau_MG values in metres.
+    #[arg(long = "tau-mg", default_value = "0.5", value_name = "VALUES")]
+    pub tau_mg: String,
+    /// AVC virtual-camera baselines in metres (e.g. `0.01:0.13:0.02` for Table I).
+    #[arg(long, default_value = "0.09", value_name = "VALUES")]
+    pub baseline: String,
+    /// Seeded runs per sequence and parameter set (seeds 0..n-1).
+    #[arg(long, default_value_t = 10)]
+    pub runs: u64,
+    /// Parallel runs at once [default: all cores].
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Output folder (runs.csv, trajectories).
+    #[arg(long, default_value = "results/sweep", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Run only slice K of N (1-based) of the runs; default: from SLURM_ARRAY_TASK_ID /
+    /// SLURM_ARRAY_TASK_COUNT when set, else everything.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// TOML configuration overlaid on the defaults of every run.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Synthetic sequences: number of frames (default 300); real ones: only the first N frames.
+    #[arg(long, value_name = "N")]
+    pub frames: Option<usize>,
+    /// Seed of synthetic sequences' scene and noise.
+    #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
+    pub synth_seed: u64,
+    /// Data root for real sequences [default: $NOISEFREE_DATA, else ./data].
+    #[arg(long = "data-dir", value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// Stop after this many runs have finished in this invocation (for testing resumption).
+    #[arg(long = "max-runs", value_name = "N", hide = true)]
+    pub max_runs: Option<usize>,
+    /// No progress bars.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+fn sources(args: &SweepArgs, catalog: &Catalog) -> Result<Vec<Source>> {
+    let mut out: Vec<Source> = Vec::new();
+    let mut push = |s: Source| {
+        if !out.contains(&s) {
+            out.push(s);
+        }
+    };
+    for name in &args.seq {
+        catalog.get(name)?;
+        push(Source::Catalog(name.clone()));
+    }
+    for p in &args.path {
+        push(Source::Path(p.clone()));
+    }
+    if let Some(c) = &args.class {
+        let class = match c.as_str() {
+            "easy" => Class::Easy,
+            "hard" => Class::Hard,
+            other => bail!("--class {other:?}: expected easy or hard"),
+        };
+        for e in catalog.by_class(class) {
+            push(Source::Catalog(e.name.clone()));
+        }
+    }
+    if args.all_tum {
+        for e in catalog.by_format(EntryFormat::Tum) {
+            push(Source::Catalog(e.name.clone()));
+        }
+    }
+    if args.all_euroc {
+        for e in catalog.by_format(EntryFormat::Euroc) {
+            push(Source::Catalog(e.name.clone()));
+        }
+    }
+    if args.all_synthetic {
+        for e in catalog.by_format(EntryFormat::Synthetic) {
+            push(Source::Catalog(e.name.clone()));
+        }
+    }
+    if out.is_empty() {
+        bail!("no sequence given: use --seq, --path, --class, --all-tum, --all-euroc or --all-synthetic");
+    }
+    Ok(out)
+}
+
+/// The configuration of one job.
+pub fn job_config(base: &Config, job: &Job) -> Config {
+    let mut c = base.clone();
+    c.seed = job.seed;
+    c.mcor = job.kind.mcor().then(|| {
+        let mut m = base.mcor.clone().unwrap_or_default();
+        m.tau_mf = job.params.tau_mf.unwrap_or(m.tau_mf);
+        m.tau_gf = job.params.tau_gf.unwrap_or(m.tau_gf);
+        m.tau_mg = job.params.tau_mg.unwrap_or(m.tau_mg);
+        m
+    });
+    c.avc = job.kind.avc().then(|| {
+        let mut a = base.avc.clone().unwrap_or_default();
+        a.baseline = job.params.baseline.unwrap_or(a.baseline);
+        a
+    });
+    c
+}
+
+/// A file-name-safe tag of a job's configuration and parameters.
+pub fn job_tag(job: &Job) -> String {
+    let mut tag = job.kind.name().replace('+', "-");
+    let p = &job.params;
+    if let (Some(a), Some(b), Some(c)) = (p.tau_mf, p.tau_gf, p.tau_mg) {
+        tag.push_str(&format!("_t{a}-{b}-{c}"));
+    }
+    if let Some(b) = p.baseline {
+        tag.push_str(&format!("_b{b}"));
+    }
+    tag
+}
+
+/// Runs `noisefree sweep`.
+pub fn run(args: SweepArgs) -> Result<()> {
+    let catalog = Catalog::embedded();
+    let srcs = sources(&args, &catalog)?;
+    let kinds: Vec<ConfigKind> = args
+        .configs
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(ConfigKind::parse)
+        .collect::<Result<_>>()?;
+    if kinds.is_empty() {
+        bail!("--configs is empty");
+    }
+    if args.runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let grids = Grids {
+        tau_mf: parse_values(&args.tau_mf).context("--tau-mf")?,
+        tau_gf: parse_values(&args.tau_gf).context("--tau-gf")?,
+        tau_mg: parse_values(&args.tau_mg).context("--tau-mg")?,
+        baseline: parse_values(&args.baseline).context("--baseline")?,
+    };
+    let shard = match &args.shard {
+        Some(s) => Some(Shard::parse(s)?),
+        None => Shard::from_slurm(|k| std::env::var(k).ok())?,
+    };
+    let labels: Vec<String> = srcs.iter().map(Source::label).collect();
+    let all_jobs = expand(&labels, &kinds, &grids, args.runs);
+    let store = RunStore::open(&args.out, shard)?;
+    let mine: Vec<&Job> = all_jobs
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| shard.is_none_or(|s| s.contains(*i)))
+        .map(|(_, j)| j)
+        .collect();
+    let todo: usize = mine.iter().filter(|j| !store.is_done(&j.key())).count();
+    let multi = MultiProgress::with_draw_target(if args.quiet {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    });
+    let overall = multi.add(ProgressBar::new(mine.len() as u64));
+    overall.set_style(
+        ProgressStyle::with_template(
+            "{prefix:>12} [{bar:40}] {pos}/{len} runs, elapsed {elapsed}, eta {eta}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
+    );
+    overall.set_prefix("sweep");
+    overall.set_position((mine.len() - todo) as u64);
+    if !args.quiet {
+        let shard_txt = shard
+            .map(|s| format!(" (shard {}/{})", s.index, s.count))
+            .unwrap_or_default();
+        multi.println(format!(
+            "{} runs in the sweep{shard_txt}, {} already recorded in {}, {todo} to run",
+            mine.len(),
+            mine.len() - todo,
+            store.path().display()
+        ))?;
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.jobs.unwrap_or(0))
+        .build()
+        .context("starting the worker pool")?;
+    let load_opts = LoadOptions {
+        data_dir: datasets::data_root(args.data_dir.as_deref()),
+        frames: args.frames,
+        synth_seed: args.synth_seed,
+    };
+    let started = Instant::now();
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let started_runs = std::sync::atomic::AtomicUsize::new(0);
+    let max_runs = args.max_runs.unwrap_or(usize::MAX);
+    for (src, label) in srcs.iter().zip(&labels) {
+        let jobs: Vec<&Job> = mine
+            .iter()
+            .copied()
+            .filter(|j| &j.sequence == label && !store.is_done(&j.key()))
+            .collect();
+        if jobs.is_empty() || started_runs.load(std::sync::atomic::Ordering::SeqCst) >= max_runs {
+            continue;
+        }
+        let seq = load(src, &catalog, &load_opts)?;
+        if let Some(gt) = &seq.groundtruth {
+            write_tum(
+                &args
+                    .out
+                    .join("trajectories")
+                    .join(label)
+                    .join("groundtruth.txt"),
+                gt,
+            )?;
+        }
+        let mut base = base_config(seq.camera.sensor);
+        if let Some(p) = &args.config {
+            base = overlay_file(&base, p)?;
+        }
+        let bar = multi.add(ProgressBar::new(jobs.len() as u64));
+        bar.set_style(
+            ProgressStyle::with_template("{prefix:>12} [{bar:40}] {pos}/{len} runs")
+                .expect("static template")
+                .progress_chars("=> "),
+        );
+        bar.set_prefix(label.clone());
+        let results: Vec<Result<()>> = pool.install(|| {
+            jobs.par_iter()
+                .map(|job| {
+                    // Reserve a slot first, so parallel runs never overshoot --max-runs.
+                    if started_runs.fetch_add(1, std::sync::atomic::Ordering::SeqCst) >= max_runs {
+                        return Ok(());
+                    }
+                    let cfg = job_config(&base, job);
+                    let o = run_sequence(&seq, &cfg, |_| {});
+                    let dir = args.out.join("trajectories").join(label).join(job_tag(job));
+                    // Stored in the ground truth's frame (EuRoC: body), ready for figures.
+                    let est = match &seq.t_bs {
+                        Some(t_bs) => o.trajectory.cam_to_body(t_bs),
+                        None => o.trajectory.clone(),
+                    };
+                    write_tum(&dir.join(format!("seed{}.txt", job.seed)), &est)?;
+                    if job.seed == 0 {
+                        let mut w = csv::Writer::from_writer(Vec::new());
+                        for s in &o.stats {
+                            w.serialize(s)?;
+                        }
+                        write_atomic(&dir.join("frames_seed0.csv"), &w.into_inner()?)?;
+                    }
+                    let (mean_inliers, mean_outliers) = o.mean_inliers_outliers();
+                    let rec = RunRecord {
+                        sequence: label.clone(),
+                        config: job.kind.name().to_string(),
+                        tau_mf: job.params.tau_mf,
+                        tau_gf: job.params.tau_gf,
+                        tau_mg: job.params.tau_mg,
+                        baseline: job.params.baseline,
+                        seed: job.seed,
+                        ate_rmse: o.ate_rmse(),
+                        failed: o.failed,
+                        frames: o.frames,
+                        tracked: o.tracked,
+                        keyframes: o.keyframes,
+                        map_points: o.map_points,
+                        mean_inliers,
+                        mean_outliers,
+                        fps: o.fps(),
+                        wall_s: o.wall_s,
+                    };
+                    store.append(&rec)?;
+                    finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    bar.inc(1);
+                    overall.inc(1);
+                    Ok(())
+                })
+                .collect()
+        });
+        bar.finish_and_clear();
+        for r in results {
+            r?;
+        }
+    }
+    overall.finish_and_clear();
+    if !args.quiet {
+        eprintln!(
+            "{} runs finished in {:.1} s; records in {}",
+            finished.load(std::sync::atomic::Ordering::SeqCst),
+            started.elapsed().as_secs_f64(),
+            store.path().display()
+        );
+    }
+    Ok(())
+}
+
+/// Whether a folder looks like a sweep output (has a runs*.csv).
+pub fn is_sweep_dir(dir: &Path) -> bool {
+    std::fs::read_dir(dir)
+        .map(|it| {
+            it.filter_map(|e| e.ok()).any(|e| {
+                let n = e.file_name();
+                let n = n.to_string_lossy();
+                n.starts_with("runs") && n.ends_with(".csv")
+            })
+        })
+        .unwrap_or(false)
+}

@@ -1,0 +1,194 @@
+//! `noisefree table`: turns the run records of sweeps (`runs.csv` and shard files, merged) into
+//! the paper's tables, as Markdown and CSV beside the records.
+
+use crate::commands::sweep::is_sweep_dir;
+use crate::sweep::store::load_dir;
+use crate::tables::{table1, table3, table4, threshold_grid, Rendered};
+use anyhow::{bail, Result};
+use ate_eval::io::write_atomic;
+use datasets::Catalog;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `noisefree table`.
+#[derive(clap::Args, Debug)]
+pub struct TableArgs {
+    /// Sweep folders (holding runs.csv or runs.shard-K-of-N.csv) [default: every such folder
+    /// under results/].
+    pub dirs: Vec<PathBuf>,
+    /// Print the paper's published numbers beside ours in Table III.
+    #[arg(long)]
+    pub paper: bool,
+    /// Also print the Markdown to standard output.
+    #[arg(long)]
+    pub print: bool,
+}
+
+fn write_table(dir: &Path, stem: &str, t: &Rendered) -> Result<()> {
+    write_atomic(&dir.join(format!("{stem}.md")), t.markdown.as_bytes())?;
+    write_atomic(&dir.join(format!("{stem}.csv")), t.csv.as_bytes())?;
+    Ok(())
+}
+
+/// Writes every table of one sweep folder; returns the combined Markdown.
+pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> {
+    let records = load_dir(dir)?;
+    let mut all = format!(
+        "# Tables of {}\n\n{} runs recorded.\n\n",
+        dir.display(),
+        records.len()
+    );
+    let t3 = table3(&records, catalog, paper);
+    write_table(dir, "table3", &t3)?;
+    all.push_str(&t3.markdown);
+    if let Some(t1) = table1(&records, catalog) {
+        write_table(dir, "table1", &t1)?;
+        all.push('\n');
+        all.push_str(&t1.markdown);
+    }
+    let t4 = table4(&records, catalog);
+    write_table(dir, "table4", &t4)?;
+    all.push('\n');
+    all.push_str(&t4.markdown);
+    if let Some(g) = threshold_grid(&records, catalog) {
+        write_table(dir, "thresholds", &g)?;
+        all.push('\n');
+        all.push_str(&g.markdown);
+    }
+    write_atomic(&dir.join("tables.md"), all.as_bytes())?;
+    figures_for(dir, &records)?;
+    Ok(all)
+}
+
+/// Folders of `dir`, sorted by name.
+fn subdirs(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map(|it| {
+            it.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_dir())
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// (frame index, outliers / (inliers + outliers)) from a per-frame CSV of the system.
+fn outlier_ratio(path: &Path) -> Result<Vec<(f64, f64)>> {
+    let mut rdr = csv::Reader::from_path(path)?;
+    let h = rdr.headers()?.clone();
+    let col = |name: &str| {
+        h.iter()
+            .position(|c| c == name)
+            .ok_or_else(|| anyhow::anyhow!("{}: no column {name}", path.display()))
+    };
+    let (ci, co) = (col("n_inliers")?, col("n_outliers")?);
+    let mut out = Vec::new();
+    for (i, r) in rdr.records().enumerate() {
+        let r = r?;
+        let inl: f64 = r.get(ci).unwrap_or("0").parse().unwrap_or(0.0);
+        let outl: f64 = r.get(co).unwrap_or("0").parse().unwrap_or(0.0);
+        if inl + outl > 0.0 {
+            out.push((i as f64, outl / (inl + outl)));
+        }
+    }
+    Ok(out)
+}
+
+/// Writes the figures of a sweep folder into `<dir>/figures/`: the ATE spread over runs
+/// (Fig. 9), and per sequence the top-view trajectories of seed 0 aligned to the ground truth
+/// (Fig. 1) and the outlier ratio over frames (Fig. 8).
+pub fn figures_for(dir: &Path, records: &[crate::sweep::store::RunRecord]) -> Result<()> {
+    let fig = dir.join("figures");
+    let mut groups: Vec<(String, String, Vec<f64>)> = Vec::new();
+    for r in records.iter().filter(|r| !r.failed) {
+        let Some(a) = r.ate_rmse else { continue };
+        match groups
+            .iter_mut()
+            .find(|g| g.0 == r.sequence && g.1 == r.config)
+        {
+            Some(g) => g.2.push(a),
+            None => groups.push((r.sequence.clone(), r.config.clone(), vec![a])),
+        }
+    }
+    if !groups.is_empty() {
+        crate::figures::ate_spread(
+            &fig.join("ate_spread"),
+            "ATE RMSE over seeded runs",
+            &groups,
+        )?;
+    }
+    let traj_root = dir.join("trajectories");
+    for seq_dir in subdirs(&traj_root) {
+        let seq = seq_dir
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let gt = ate_eval::io::read_tum(&seq_dir.join("groundtruth.txt")).ok();
+        let mut curves = Vec::new();
+        let mut ratios = Vec::new();
+        for cfg_dir in subdirs(&seq_dir) {
+            let tag = cfg_dir
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            if let (Some(gt), Ok(est)) = (&gt, ate_eval::io::read_tum(&cfg_dir.join("seed0.txt"))) {
+                if let Ok(a) = ate_eval::evaluate_ate(gt, &est, &ate_eval::AteOptions::default()) {
+                    let name = format!("{tag} (ATE {:.3} m)", a.stats.rmse);
+                    curves.push((name, est.transformed(a.alignment.scale, &a.alignment.rt)));
+                }
+            }
+            if let Ok(r) = outlier_ratio(&cfg_dir.join("frames_seed0.csv")) {
+                ratios.push((tag, r));
+            }
+        }
+        if let (Some(gt), false) = (&gt, curves.is_empty()) {
+            crate::figures::trajectories(
+                &fig.join(format!("trajectory_{seq}")),
+                &format!("{seq}: top view, seed 0"),
+                gt,
+                &curves,
+            )?;
+        }
+        if !ratios.is_empty() {
+            crate::figures::per_frame(
+                &fig.join(format!("outlier_ratio_{seq}")),
+                &format!("{seq}: outliers / matches per frame, seed 0"),
+                "outlier ratio",
+                &ratios,
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// Runs `noisefree table`.
+pub fn run(args: TableArgs) -> Result<()> {
+    let catalog = Catalog::embedded();
+    let dirs: Vec<PathBuf> = if args.dirs.is_empty() {
+        let mut v: Vec<PathBuf> = std::fs::read_dir("results")
+            .map(|it| {
+                it.filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| is_sweep_dir(p))
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort();
+        v
+    } else {
+        args.dirs.clone()
+    };
+    if dirs.is_empty() {
+        bail!("no sweep folder found under results/; pass the folder of a `noisefree sweep --out DIR`");
+    }
+    for d in &dirs {
+        let md = tables_for(d, &catalog, args.paper)?;
+        eprintln!(
+            "wrote {0}/tables.md, {0}/table*.csv and {0}/figures/",
+            d.display()
+        );
+        if args.print {
+            println!("{md}");
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,75 @@
+//! Building a run's `slam_core::system::Config`: the defaults for the sensor (ORB-SLAM2's TUM
+//! or EuRoC settings), overlaid with a TOML file where every field is optional, then the
+//! command line's switches (`--mcor`, `--avc`, `--seed`).
+
+use anyhow::{Context, Result};
+use slam_core::system::{AvcParams, Config, McorParams};
+use slam_core::SensorKind;
+use std::path::Path;
+
+/// The default configuration for a sensor: ORB-SLAM2's TUM RGB-D or EuRoC stereo settings.
+pub fn base_config(sensor: SensorKind) -> Config {
+    match sensor {
+        SensorKind::Rgbd => Config::default(),
+        SensorKind::Stereo => Config::stereo(),
+    }
+}
+
+fn merge(base: &mut toml::Value, over: toml::Value) {
+    match (base, over) {
+        (toml::Value::Table(b), toml::Value::Table(o)) => {
+            for (k, v) in o {
+                match b.get_mut(&k) {
+                    Some(slot) => merge(slot, v),
+                    None => {
+                        b.insert(k, v);
+                    }
+                }
+            }
+        }
+        (slot, v) => *slot = v,
+    }
+}
+
+/// Overlays the TOML file at `path` (any subset of the fields of `Config`) on `base`.
+pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let over: toml::Value =
+        toml::from_str(&text).with_context(|| format!("{}: not valid TOML", path.display()))?;
+    let mut value = toml::Value::try_from(base).context("serialising the default configuration")?;
+    merge(&mut value, over);
+    value
+        .try_into()
+        .with_context(|| format!("{}: not a valid noisefree configuration", path.display()))
+}
+
+/// Switches of the command line applied on top of a configuration.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Switches {
+    /// Turn MC-OR on with its default thresholds (unless the file configured it).
+    pub mcor: bool,
+    /// Turn AVC on with its default baseline (unless the file configured it).
+    pub avc: bool,
+}
+
+/// Applies the switches.
+pub fn apply_switches(mut config: Config, s: Switches) -> Config {
+    if s.mcor && config.mcor.is_none() {
+        config.mcor = Some(McorParams::default());
+    }
+    if s.avc && config.avc.is_none() {
+        config.avc = Some(AvcParams::default());
+    }
+    config
+}
+
+/// The configuration name of the paper's columns: `orb`, `mcor`, `avc` or `mcor+avc`.
+pub fn config_name(c: &Config) -> &'static str {
+    match (c.mcor.is_some(), c.avc.is_some()) {
+        (false, false) => "orb",
+        (true, false) => "mcor",
+        (false, true) => "avc",
+        (true, true) => "mcor+avc",
+    }
+}

@@ -1,0 +1,287 @@
+//! Figures in the paper's spirit, as PNG and SVG (plotters, with an embedded DejaVu Sans so a
+//! machine without fonts draws text): top-view trajectories (Fig. 1), ATE spread over runs per
+//! configuration (Fig. 9) and the outlier ratio over frames (Fig. 8).
+
+use anyhow::{anyhow, Result};
+use ate_eval::Trajectory;
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+static FONT: Once = Once::new();
+
+fn register_font() {
+    FONT.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+        // Registration fails only on a corrupt font file, which the build embeds; ignore.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
+    });
+}
+
+/// Colours of the curves, in order (ground truth first).
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(0, 0, 0),
+    RGBColor(214, 39, 40),
+    RGBColor(31, 119, 180),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+];
+
+fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing a figure: {e:?}")
+}
+
+/// Draws the body into `<stem>.png` (1000 x 750) and `<stem>.svg`, each through a temporary
+/// file and a rename. A macro, because the body is instantiated once per backend type.
+macro_rules! both {
+    ($stem:expr, |$root:ident| $body:block) => {{
+        register_font();
+        let stem: &Path = $stem;
+        if let Some(d) = stem.parent() {
+            std::fs::create_dir_all(d)?;
+        }
+        let tmp_png = stem.with_extension("tmp.png");
+        let tmp_svg = stem.with_extension("tmp.svg");
+        {
+            let area = BitMapBackend::new(&tmp_png, (1000, 750)).into_drawing_area();
+            area.fill(&WHITE).map_err(err)?;
+            (|| -> Result<()> {
+                let $root = &area;
+                $body
+            })()?;
+            area.present().map_err(err)?;
+        }
+        {
+            let area = SVGBackend::new(&tmp_svg, (1000, 750)).into_drawing_area();
+            area.fill(&WHITE).map_err(err)?;
+            (|| -> Result<()> {
+                let $root = &area;
+                $body
+            })()?;
+            area.present().map_err(err)?;
+        }
+        std::fs::rename(&tmp_png, stem.with_extension("png"))?;
+        std::fs::rename(&tmp_svg, stem.with_extension("svg"))?;
+        Ok(())
+    }};
+}
+
+/// The two world axes spanning the plane in which the ground truth moves most (a top view for
+/// a camera moving over a floor, whatever the dataset's "up" axis is).
+fn top_view_axes(gt: &Trajectory) -> (usize, usize) {
+    let p = gt.positions();
+    let n = p.len().max(1) as f64;
+    let mean = p.iter().sum::<nalgebra::Vector3<f64>>() / n;
+    let var: Vec<f64> = (0..3)
+        .map(|k| p.iter().map(|v| (v[k] - mean[k]).powi(2)).sum::<f64>())
+        .collect();
+    let smallest = (0..3)
+        .min_by(|&a, &b| var[a].total_cmp(&var[b]))
+        .unwrap_or(2);
+    let axes: Vec<usize> = (0..3).filter(|&k| k != smallest).collect();
+    (axes[0], axes[1])
+}
+
+/// Fig. 1: top view of the ground truth and of aligned estimates (`curves`: name, trajectory
+/// already in the ground-truth frame).
+pub fn trajectories(
+    stem: &Path,
+    title: &str,
+    gt: &Trajectory,
+    curves: &[(String, Trajectory)],
+) -> Result<()> {
+    let (a, b) = top_view_axes(gt);
+    let axis = ["x", "y", "z"];
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for t in std::iter::once(gt).chain(curves.iter().map(|c| &c.1)) {
+        for p in t.positions() {
+            for (k, ax) in [a, b].into_iter().enumerate() {
+                lo[k] = lo[k].min(p[ax]);
+                hi[k] = hi[k].max(p[ax]);
+            }
+        }
+    }
+    // Equal scale on both axes, with a margin.
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-3) * 1.1;
+    let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    let range = |k: usize| (c[k] - span / 2.0)..(c[k] + span / 2.0);
+    both!(stem, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 26))
+            .margin(20)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(range(0), range(1))
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("{} [m]", axis[a]))
+            .y_desc(format!("{} [m]", axis[b]))
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(err)?;
+        let series = std::iter::once(("ground truth".to_string(), gt))
+            .chain(curves.iter().map(|(n, t)| (n.clone(), t)));
+        for (i, (name, t)) in series.enumerate() {
+            let color = PALETTE[i % PALETTE.len()];
+            let pts: Vec<(f64, f64)> = t.positions().iter().map(|p| (p[a], p[b])).collect();
+            chart
+                .draw_series(LineSeries::new(
+                    pts,
+                    color.stroke_width(if i == 0 { 3 } else { 2 }),
+                ))
+                .map_err(err)?
+                .label(name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
+}
+
+/// Fig. 9: ATE of every run (dots) and the mean (bar) per sequence and configuration.
+/// `groups`: (sequence, configuration, ATEs of its runs).
+pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)]) -> Result<()> {
+    let mut seqs: Vec<String> = Vec::new();
+    let mut cfgs: Vec<String> = Vec::new();
+    for (s, c, _) in groups {
+        if !seqs.contains(s) {
+            seqs.push(s.clone());
+        }
+        if !cfgs.contains(c) {
+            cfgs.push(c.clone());
+        }
+    }
+    let ymax = groups
+        .iter()
+        .flat_map(|g| g.2.iter().copied())
+        .fold(0.0f64, f64::max)
+        .max(1e-4)
+        * 1.15;
+    let ncfg = cfgs.len().max(1) as f64;
+    both!(stem, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 26))
+            .margin(20)
+            .x_label_area_size(60)
+            .y_label_area_size(70)
+            .build_cartesian_2d(-0.5f64..(seqs.len() as f64 - 0.5), 0.0..ymax)
+            .map_err(err)?;
+        let seq_names = seqs.clone();
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(seqs.len().max(1))
+            .x_label_formatter(&|x| {
+                let i = x.round();
+                if (x - i).abs() < 1e-6 && i >= 0.0 {
+                    seq_names.get(i as usize).cloned().unwrap_or_default()
+                } else {
+                    String::new()
+                }
+            })
+            .y_desc("ATE RMSE [m]")
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(err)?;
+        for (ci, cfg) in cfgs.iter().enumerate() {
+            let color = PALETTE[(ci + 1) % PALETTE.len()];
+            let offset = (ci as f64 + 0.5) / ncfg * 0.8 - 0.4;
+            let mut dots = Vec::new();
+            let mut bars = Vec::new();
+            for (s, c, ates) in groups {
+                if c != cfg || ates.is_empty() {
+                    continue;
+                }
+                let x = seqs.iter().position(|q| q == s).unwrap_or(0) as f64 + offset;
+                dots.extend(ates.iter().map(|&a| (x, a)));
+                let mean = ates.iter().sum::<f64>() / ates.len() as f64;
+                bars.push(((x - 0.3 / ncfg, mean), (x + 0.3 / ncfg, mean)));
+            }
+            chart
+                .draw_series(dots.iter().map(|&p| Circle::new(p, 4, color.filled())))
+                .map_err(err)?
+                .label(cfg.clone())
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+            chart
+                .draw_series(
+                    bars.iter()
+                        .map(|&(p, q)| PathElement::new(vec![p, q], color.stroke_width(3))),
+                )
+                .map_err(err)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
+}
+
+/// Fig. 8: a per-frame quantity (e.g. outlier ratio) over frames, one curve per configuration.
+pub fn per_frame(
+    stem: &Path,
+    title: &str,
+    y_desc: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+) -> Result<()> {
+    let xmax = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|p| p.0))
+        .fold(1.0f64, f64::max);
+    let ymax = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|p| p.1))
+        .fold(1e-3f64, f64::max)
+        * 1.1;
+    both!(stem, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 26))
+            .margin(20)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..xmax, 0.0..ymax)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("frame")
+            .y_desc(y_desc)
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(err)?;
+        for (i, (name, pts)) in series.iter().enumerate() {
+            let color = PALETTE[(i + 1) % PALETTE.len()];
+            chart
+                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+                .map_err(err)?
+                .label(name.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
+}

@@ -1,0 +1,102 @@
+//! One SLAM run over a decoded sequence: feed every frame to `slam_core::System`, collect the
+//! trajectory and per-frame statistics, and score it against ground truth with ate-eval in the
+//! frame the ground truth is expressed in (EuRoC: body frame via T_BS).
+
+use ate_eval::{evaluate_ate, AteOptions, AteResult, Trajectory};
+use datasets::Sequence;
+use slam_core::system::{Config, FrameStats, System};
+use std::time::Instant;
+
+/// A run fails ('F' in the paper's tables) when fewer than this fraction of the frames have a
+/// pose, or when no ATE can be computed at all.
+pub const MIN_TRACKED_FRACTION: f64 = 0.8;
+
+/// Everything a run produces.
+#[derive(Clone, Debug)]
+pub struct RunOutcome {
+    /// Estimated camera trajectory (T_world_camera, TUM convention), tracked frames only.
+    pub trajectory: Trajectory,
+    /// Per-frame statistics, one per input frame.
+    pub stats: Vec<FrameStats>,
+    /// ATE against ground truth, when the sequence has ground truth and enough poses associate.
+    pub ate: Option<AteResult>,
+    /// Frames fed to the system.
+    pub frames: usize,
+    /// Frames with a pose.
+    pub tracked: usize,
+    /// Keyframes in the final map.
+    pub keyframes: usize,
+    /// Map points in the final map.
+    pub map_points: usize,
+    /// Wall time of the run, seconds (single thread).
+    pub wall_s: f64,
+    /// The failure verdict ('F').
+    pub failed: bool,
+}
+
+impl RunOutcome {
+    /// Frames processed per second of wall time.
+    pub fn fps(&self) -> f64 {
+        if self.wall_s > 0.0 {
+            self.frames as f64 / self.wall_s
+        } else {
+            0.0
+        }
+    }
+
+    /// ATE RMSE in metres, when computed.
+    pub fn ate_rmse(&self) -> Option<f64> {
+        self.ate.as_ref().map(|a| a.stats.rmse)
+    }
+
+    /// Mean over frames of (inliers, outliers) of the final pose optimization.
+    pub fn mean_inliers_outliers(&self) -> (f64, f64) {
+        let n = self.stats.len().max(1) as f64;
+        let i: usize = self.stats.iter().map(|s| s.n_inliers).sum();
+        let o: usize = self.stats.iter().map(|s| s.n_outliers).sum();
+        (i as f64 / n, o as f64 / n)
+    }
+}
+
+/// Runs `config` over `seq`, calling `on_frame` after each frame (for progress bars).
+pub fn run_sequence(
+    seq: &Sequence,
+    config: &Config,
+    mut on_frame: impl FnMut(usize),
+) -> RunOutcome {
+    let start = Instant::now();
+    let mut system = System::new(seq.camera.clone(), config.clone());
+    let mut stats = Vec::with_capacity(seq.frames.len());
+    for (i, frame) in seq.frames.iter().enumerate() {
+        let r = system.track(frame);
+        stats.push(r.stats);
+        on_frame(i + 1);
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let mut trajectory = Trajectory::new();
+    for (t, pose) in system.trajectory() {
+        trajectory.push(t, pose);
+    }
+    let tracked = trajectory.len();
+    let ate = seq.groundtruth.as_ref().and_then(|gt| {
+        let est = match &seq.t_bs {
+            Some(t_bs) => trajectory.cam_to_body(t_bs),
+            None => trajectory.clone(),
+        };
+        evaluate_ate(gt, &est, &AteOptions::default()).ok()
+    });
+    let frames = seq.frames.len();
+    let failed = ate.is_none() && seq.groundtruth.is_some()
+        || (tracked as f64) < MIN_TRACKED_FRACTION * frames as f64;
+    RunOutcome {
+        trajectory,
+        stats,
+        ate,
+        frames,
+        tracked,
+        keyframes: system.keyframe_count(),
+        map_points: system.map_point_count(),
+        wall_s,
+        failed,
+    }
+}

@@ -1,0 +1,109 @@
+//! Turning the command line's sequence choice (`--seq NAME`, `--path DIR`, or nothing: the
+//! embedded synthetic default) into a decoded [`Sequence`].
+
+use anyhow::{bail, Context, Result};
+use datasets::{Catalog, Sequence};
+use std::path::{Path, PathBuf};
+
+/// Synthetic preset of the embedded default (`noisefree run` with no sequence): RGB-D with the
+/// Kinect-like depth noise model.
+pub const DEFAULT_PRESET: &str = "kinect";
+/// Frames of a synthetic sequence when `--frames` is not given (10 s at 30 Hz).
+pub const DEFAULT_SYNTH_FRAMES: usize = 300;
+
+/// Where a sequence comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Source {
+    /// A catalogued name (datasets.toml): a downloaded sequence or a synthetic preset.
+    Catalog(String),
+    /// Any TUM RGB-D or EuRoC folder.
+    Path(PathBuf),
+}
+
+impl Source {
+    /// The source the flags name, or the embedded synthetic default.
+    pub fn from_flags(seq: Option<&str>, path: Option<&Path>) -> Source {
+        match (seq, path) {
+            (_, Some(p)) => Source::Path(p.to_path_buf()),
+            (Some(s), None) => Source::Catalog(s.to_string()),
+            (None, None) => Source::Catalog(DEFAULT_PRESET.to_string()),
+        }
+    }
+
+    /// A short label for tables and file names.
+    pub fn label(&self) -> String {
+        match self {
+            Source::Catalog(n) => n.clone(),
+            Source::Path(p) => p
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| p.display().to_string()),
+        }
+    }
+}
+
+/// Options of loading that do not name the sequence.
+#[derive(Clone, Debug)]
+pub struct LoadOptions {
+    /// Data root for catalogued real sequences.
+    pub data_dir: PathBuf,
+    /// Synthetic sequences: frames to generate; real ones: keep only the first N frames.
+    pub frames: Option<usize>,
+    /// Seed of a synthetic sequence's noise and scene (the sequence, not the SLAM run).
+    pub synth_seed: u64,
+}
+
+/// Loads (or generates) the sequence of `source`.
+pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Sequence> {
+    let mut seq = match source {
+        Source::Path(p) => {
+            datasets::load_path(p).with_context(|| format!("loading {}", p.display()))?
+        }
+        Source::Catalog(name) => {
+            let entry = catalog.get(name)?;
+            if let Some(preset) = &entry.preset {
+                let config = synth::SynthConfig::preset(preset)?;
+                let generator = synth::Generator::try_new(config, opts.synth_seed)?;
+                let n = opts.frames.unwrap_or(DEFAULT_SYNTH_FRAMES);
+                if n == 0 {
+                    bail!("--frames must be at least 1");
+                }
+                let mut s = datasets::from_synth(&generator, n);
+                s.name = entry.name.clone();
+                s
+            } else {
+                let dir = entry
+                    .path(&opts.data_dir)
+                    .with_context(|| format!("catalog entry {name} has no folder"))?;
+                if !dir.is_dir() {
+                    bail!(
+                        "sequence {name} is not in {} (expected folder {}); run `noisefree fetch {name}` \
+                         or pass --data-dir / set NOISEFREE_DATA",
+                        opts.data_dir.display(),
+                        dir.display()
+                    );
+                }
+                let mut s = datasets::load_path(&dir)
+                    .with_context(|| format!("loading {}", dir.display()))?;
+                s.name = entry.name.clone();
+                s
+            }
+        }
+    };
+    if let (Some(n), Source::Path(_)) = (opts.frames, source) {
+        seq.frames.truncate(n);
+    }
+    if let (Some(n), Source::Catalog(name)) = (opts.frames, source) {
+        if catalog
+            .get(name)
+            .map(|e| e.preset.is_none())
+            .unwrap_or(false)
+        {
+            seq.frames.truncate(n);
+        }
+    }
+    if seq.frames.is_empty() {
+        bail!("sequence {} has no frames", source.label());
+    }
+    Ok(seq)
+}

@@ -1,0 +1,353 @@
+//! Expanding a sweep's command line into a deterministic, ordered list of runs, and slicing it
+//! into shards for a cluster's job array.
+
+use anyhow::{bail, Context, Result};
+use std::fmt;
+
+/// The paper's four columns of Table III.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum ConfigKind {
+    /// ORB-SLAM2 baseline (both techniques off).
+    Orb,
+    /// w/ MC-OR.
+    Mcor,
+    /// w/ AVC.
+    Avc,
+    /// w/ MC-OR + AVC.
+    McorAvc,
+}
+
+impl ConfigKind {
+    /// Every kind in the paper's column order.
+    pub const ALL: [ConfigKind; 4] = [
+        ConfigKind::Orb,
+        ConfigKind::Mcor,
+        ConfigKind::Avc,
+        ConfigKind::McorAvc,
+    ];
+
+    /// Command-line / CSV spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            ConfigKind::Orb => "orb",
+            ConfigKind::Mcor => "mcor",
+            ConfigKind::Avc => "avc",
+            ConfigKind::McorAvc => "mcor+avc",
+        }
+    }
+
+    /// Parses the command-line spelling.
+    pub fn parse(s: &str) -> Result<ConfigKind> {
+        Ok(match s.trim() {
+            "orb" | "orb-slam2" | "baseline" => ConfigKind::Orb,
+            "mcor" => ConfigKind::Mcor,
+            "avc" => ConfigKind::Avc,
+            "mcor+avc" | "avc+mcor" => ConfigKind::McorAvc,
+            other => bail!("unknown configuration {other:?}; expected orb, mcor, avc or mcor+avc"),
+        })
+    }
+
+    /// Whether MC-OR is on.
+    pub fn mcor(self) -> bool {
+        matches!(self, ConfigKind::Mcor | ConfigKind::McorAvc)
+    }
+
+    /// Whether AVC is on.
+    pub fn avc(self) -> bool {
+        matches!(self, ConfigKind::Avc | ConfigKind::McorAvc)
+    }
+}
+
+impl fmt::Display for ConfigKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Parameters of one run beyond its configuration kind. `None` where the kind does not use it.
+#[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
+pub struct Params {
+    /// MC-OR tau_MF, metres.
+    pub tau_mf: Option<f64>,
+    /// MC-OR tau_GF, metres.
+    pub tau_gf: Option<f64>,
+    /// MC-OR tau_MG, metres.
+    pub tau_mg: Option<f64>,
+    /// AVC baseline b, metres.
+    pub baseline: Option<f64>,
+}
+
+/// One run of a sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Job {
+    /// Sequence label (catalog name or folder name).
+    pub sequence: String,
+    /// Configuration kind.
+    pub kind: ConfigKind,
+    /// Its parameters.
+    pub params: Params,
+    /// Seed of the run.
+    pub seed: u64,
+}
+
+impl Job {
+    /// The identity of a run in `runs.csv`: a re-run with the same key is skipped.
+    pub fn key(&self) -> String {
+        run_key(&self.sequence, self.kind.name(), &self.params, self.seed)
+    }
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map(|x| format!("{x}")).unwrap_or_default()
+}
+
+/// The key of a run from its fields (shared by [`Job::key`] and the CSV records).
+pub fn run_key(sequence: &str, config: &str, p: &Params, seed: u64) -> String {
+    format!(
+        "{sequence}|{config}|{}|{}|{}|{}|{seed}",
+        fmt_opt(p.tau_mf),
+        fmt_opt(p.tau_gf),
+        fmt_opt(p.tau_mg),
+        fmt_opt(p.baseline)
+    )
+}
+
+/// The grids of a sweep: each list holds the values to try (defaults: the paper's).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grids {
+    /// tau_MF values.
+    pub tau_mf: Vec<f64>,
+    /// tau_GF values.
+    pub tau_gf: Vec<f64>,
+    /// tau_MG values.
+    pub tau_mg: Vec<f64>,
+    /// AVC baselines.
+    pub baseline: Vec<f64>,
+}
+
+/// Expands sequences x kinds x grids x seeds into the ordered job list: sequence-major (so a
+/// sequence is decoded once and its runs go together), then kind, parameters, seed.
+pub fn expand(sequences: &[String], kinds: &[ConfigKind], grids: &Grids, runs: u64) -> Vec<Job> {
+    let mut jobs = Vec::new();
+    for seq in sequences {
+        for &kind in kinds {
+            let mut params = Vec::new();
+            let mcor_grid: Vec<(Option<f64>, Option<f64>, Option<f64>)> = if kind.mcor() {
+                let mut v = Vec::new();
+                for &a in &grids.tau_mf {
+                    for &b in &grids.tau_gf {
+                        for &c in &grids.tau_mg {
+                            v.push((Some(a), Some(b), Some(c)));
+                        }
+                    }
+                }
+                v
+            } else {
+                vec![(None, None, None)]
+            };
+            let avc_grid: Vec<Option<f64>> = if kind.avc() {
+                grids.baseline.iter().map(|&b| Some(b)).collect()
+            } else {
+                vec![None]
+            };
+            for &(tau_mf, tau_gf, tau_mg) in &mcor_grid {
+                for &baseline in &avc_grid {
+                    params.push(Params {
+                        tau_mf,
+                        tau_gf,
+                        tau_mg,
+                        baseline,
+                    });
+                }
+            }
+            for p in params {
+                for seed in 0..runs {
+                    jobs.push(Job {
+                        sequence: seq.clone(),
+                        kind,
+                        params: p,
+                        seed,
+                    });
+                }
+            }
+        }
+    }
+    jobs
+}
+
+/// A 1-based slice `index` of `count` of a job list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based shard number.
+    pub index: usize,
+    /// Number of shards.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Parses `K/N` with 1 <= K <= N.
+    pub fn parse(s: &str) -> Result<Shard> {
+        let (k, n) = s
+            .split_once('/')
+            .with_context(|| format!("--shard {s:?}: expected K/N, e.g. 3/8"))?;
+        let index: usize = k
+            .trim()
+            .parse()
+            .with_context(|| format!("--shard {s:?}: K is not a number"))?;
+        let count: usize = n
+            .trim()
+            .parse()
+            .with_context(|| format!("--shard {s:?}: N is not a number"))?;
+        if count == 0 || index == 0 || index > count {
+            bail!("--shard {s:?}: need 1 <= K <= N");
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// The shard of a Slurm job array, from SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT and
+    /// SLURM_ARRAY_TASK_MIN (so `--array=0-7` and `--array=1-8` both work).
+    pub fn from_slurm(get: impl Fn(&str) -> Option<String>) -> Result<Option<Shard>> {
+        let (Some(id), Some(count)) = (get("SLURM_ARRAY_TASK_ID"), get("SLURM_ARRAY_TASK_COUNT"))
+        else {
+            return Ok(None);
+        };
+        let id: usize = id
+            .trim()
+            .parse()
+            .context("SLURM_ARRAY_TASK_ID is not a number")?;
+        let count: usize = count
+            .trim()
+            .parse()
+            .context("SLURM_ARRAY_TASK_COUNT is not a number")?;
+        let min: usize = match get("SLURM_ARRAY_TASK_MIN") {
+            Some(m) => m
+                .trim()
+                .parse()
+                .context("SLURM_ARRAY_TASK_MIN is not a number")?,
+            None => 0,
+        };
+        if id < min || id - min >= count {
+            bail!("SLURM_ARRAY_TASK_ID {id} is outside the array (min {min}, count {count}); use a contiguous --array");
+        }
+        Ok(Some(Shard {
+            index: id - min + 1,
+            count,
+        }))
+    }
+
+    /// Whether job number `i` (0-based position in the full list) belongs to this shard.
+    /// Round-robin, so every shard gets a similar mix of sequences and configurations.
+    pub fn contains(&self, i: usize) -> bool {
+        i % self.count == self.index - 1
+    }
+}
+
+/// Parses a list `0.1,0.3,0.5` or a range `start:stop:step` (inclusive of stop, as the paper's
+/// `0.01:0.13:0.02` = 0.01, 0.03, ..., 0.13).
+pub fn parse_values(s: &str) -> Result<Vec<f64>> {
+    let num = |t: &str| -> Result<f64> {
+        let v: f64 = t
+            .trim()
+            .parse()
+            .with_context(|| format!("{t:?} is not a number"))?;
+        if !v.is_finite() {
+            bail!("{t:?} is not finite");
+        }
+        Ok(v)
+    };
+    if s.contains(':') {
+        let parts: Vec<&str> = s.split(':').collect();
+        if parts.len() != 3 {
+            bail!("range {s:?}: expected start:stop:step");
+        }
+        let (a, b, step) = (num(parts[0])?, num(parts[1])?, num(parts[2])?);
+        if step <= 0.0 || b < a {
+            bail!("range {s:?}: need step > 0 and stop >= start");
+        }
+        let n = ((b - a) / step + 1e-9).floor() as usize;
+        // Round to 12 decimals so 0.01 + 3 * 0.02 prints as 0.07, not 0.06999999999999999.
+        Ok((0..=n)
+            .map(|k| ((a + k as f64 * step) * 1e12).round() / 1e12)
+            .collect())
+    } else {
+        s.split(',')
+            .filter(|t| !t.trim().is_empty())
+            .map(num)
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_and_lists() {
+        assert_eq!(
+            parse_values("0.01:0.13:0.02").unwrap(),
+            vec![0.01, 0.03, 0.05, 0.07, 0.09, 0.11, 0.13]
+        );
+        assert_eq!(parse_values("0.1,0.3, 0.5").unwrap(), vec![0.1, 0.3, 0.5]);
+        assert!(parse_values("0.1:0.0:0.1").is_err());
+        assert!(parse_values("a,b").is_err());
+    }
+
+    #[test]
+    fn expansion_counts_and_order() {
+        let grids = Grids {
+            tau_mf: vec![0.1, 0.7],
+            tau_gf: vec![0.7],
+            tau_mg: vec![0.5],
+            baseline: vec![0.05, 0.09],
+        };
+        let jobs = expand(&["a".into(), "b".into()], &ConfigKind::ALL, &grids, 3);
+        // per sequence: orb 1 + mcor 2 + avc 2 + mcor+avc 4 = 9 parameter sets, x 3 seeds
+        assert_eq!(jobs.len(), 2 * 9 * 3);
+        assert!(jobs[..27].iter().all(|j| j.sequence == "a"));
+        let keys: std::collections::BTreeSet<String> = jobs.iter().map(Job::key).collect();
+        assert_eq!(keys.len(), jobs.len(), "keys are unique");
+    }
+
+    #[test]
+    fn shards_partition_the_jobs() {
+        for n in 1..6 {
+            let shards: Vec<Shard> = (1..=n)
+                .map(|k| Shard::parse(&format!("{k}/{n}")).unwrap())
+                .collect();
+            for i in 0..50 {
+                assert_eq!(shards.iter().filter(|s| s.contains(i)).count(), 1);
+            }
+        }
+        assert!(
+            Shard::parse("0/3").is_err()
+                && Shard::parse("4/3").is_err()
+                && Shard::parse("x").is_err()
+        );
+    }
+
+    #[test]
+    fn slurm_environment() {
+        let env = |pairs: &'static [(&'static str, &'static str)]| {
+            move |k: &str| {
+                pairs
+                    .iter()
+                    .find(|(a, _)| *a == k)
+                    .map(|(_, v)| v.to_string())
+            }
+        };
+        assert_eq!(Shard::from_slurm(env(&[])).unwrap(), None);
+        let s = Shard::from_slurm(env(&[
+            ("SLURM_ARRAY_TASK_ID", "0"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+        ]))
+        .unwrap();
+        assert_eq!(s, Some(Shard { index: 1, count: 4 }));
+        let s = Shard::from_slurm(env(&[
+            ("SLURM_ARRAY_TASK_ID", "8"),
+            ("SLURM_ARRAY_TASK_COUNT", "8"),
+            ("SLURM_ARRAY_TASK_MIN", "1"),
+        ]))
+        .unwrap();
+        assert_eq!(s, Some(Shard { index: 8, count: 8 }));
+    }
+}

@@ -1,0 +1,301 @@
+//! The record of a sweep: `runs.csv` (or `runs.shard-K-of-N.csv` for a shard), one row per
+//! finished run, appended the moment the run ends. Rows are written whole with one write, a
+//! torn last line (a kill mid-write) is dropped and the file rewritten atomically on the next
+//! open, and a run whose key is already recorded is not run again — so an interrupted sweep
+//! resumes where it stopped and the file never holds a half row.
+
+use super::plan::{run_key, Params, Shard};
+use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// One finished run: a row of `runs.csv`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunRecord {
+    /// Sequence label.
+    pub sequence: String,
+    /// Configuration kind (`orb`, `mcor`, `avc`, `mcor+avc`).
+    pub config: String,
+    /// MC-OR tau_MF (m), empty when MC-OR is off.
+    pub tau_mf: Option<f64>,
+    /// MC-OR tau_GF (m).
+    pub tau_gf: Option<f64>,
+    /// MC-OR tau_MG (m).
+    pub tau_mg: Option<f64>,
+    /// AVC baseline (m), empty when AVC is off.
+    pub baseline: Option<f64>,
+    /// Seed.
+    pub seed: u64,
+    /// ATE RMSE in metres (empty when it could not be computed).
+    pub ate_rmse: Option<f64>,
+    /// Failure verdict ('F').
+    pub failed: bool,
+    /// Frames fed.
+    pub frames: usize,
+    /// Frames with a pose.
+    pub tracked: usize,
+    /// Keyframes at the end.
+    pub keyframes: usize,
+    /// Map points at the end.
+    pub map_points: usize,
+    /// Mean inliers per frame.
+    pub mean_inliers: f64,
+    /// Mean outliers per frame.
+    pub mean_outliers: f64,
+    /// Frames per second (one thread).
+    pub fps: f64,
+    /// Wall time of the run, seconds.
+    pub wall_s: f64,
+}
+
+impl RunRecord {
+    /// The run's parameters.
+    pub fn params(&self) -> Params {
+        Params {
+            tau_mf: self.tau_mf,
+            tau_gf: self.tau_gf,
+            tau_mg: self.tau_mg,
+            baseline: self.baseline,
+        }
+    }
+
+    /// The run's identity (same as the job's key).
+    pub fn key(&self) -> String {
+        run_key(&self.sequence, &self.config, &self.params(), self.seed)
+    }
+}
+
+/// File name of the record of a shard (or of an unsharded sweep).
+pub fn file_name(shard: Option<Shard>) -> String {
+    match shard {
+        None => "runs.csv".into(),
+        Some(s) => format!("runs.shard-{}-of-{}.csv", s.index, s.count),
+    }
+}
+
+fn header() -> String {
+    let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
+    w.write_record([
+        "sequence",
+        "config",
+        "tau_mf",
+        "tau_gf",
+        "tau_mg",
+        "baseline",
+        "seed",
+        "ate_rmse",
+        "failed",
+        "frames",
+        "tracked",
+        "keyframes",
+        "map_points",
+        "mean_inliers",
+        "mean_outliers",
+        "fps",
+        "wall_s",
+    ])
+    .expect("in-memory write");
+    String::from_utf8(w.into_inner().expect("in-memory")).expect("ascii")
+}
+
+fn row(rec: &RunRecord) -> Result<String> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    w.serialize(rec)?;
+    Ok(String::from_utf8(w.into_inner()?)?)
+}
+
+/// Reads the complete rows of a record file; a torn final line (no newline) is ignored and
+/// reported by the returned flag.
+pub fn read_records(path: &Path) -> Result<(Vec<RunRecord>, bool)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let (complete, torn) = match text.rfind('\n') {
+        Some(i) if i + 1 < text.len() => (&text[..=i], true),
+        Some(_) => (&text[..], false),
+        None => ("", !text.is_empty()),
+    };
+    let mut rdr = csv::ReaderBuilder::new().from_reader(complete.as_bytes());
+    let mut out = Vec::new();
+    for (i, r) in rdr.deserialize::<RunRecord>().enumerate() {
+        let rec =
+            r.with_context(|| format!("{}:{}: malformed run record", path.display(), i + 2))?;
+        out.push(rec);
+    }
+    Ok((out, torn))
+}
+
+/// An open record file, shared by the parallel runs of a sweep.
+pub struct RunStore {
+    path: PathBuf,
+    file: Mutex<File>,
+    done: BTreeSet<String>,
+}
+
+impl RunStore {
+    /// Opens (or creates) the record in `dir` for `shard`, repairing a torn last line.
+    pub fn open(dir: &Path, shard: Option<Shard>) -> Result<RunStore> {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let path = dir.join(file_name(shard));
+        let mut done = BTreeSet::new();
+        if path.exists() {
+            let (records, torn) = read_records(&path)?;
+            if torn {
+                let mut text = header();
+                for r in &records {
+                    text.push_str(&row(r)?);
+                }
+                ate_eval::io::write_atomic(&path, text.as_bytes())?;
+            }
+            done = records.iter().map(RunRecord::key).collect();
+        } else {
+            ate_eval::io::write_atomic(&path, header().as_bytes())?;
+        }
+        let file = OpenOptions::new()
+            .append(true)
+            .open(&path)
+            .with_context(|| format!("opening {} for appending", path.display()))?;
+        Ok(RunStore {
+            path,
+            file: Mutex::new(file),
+            done,
+        })
+    }
+
+    /// Whether a run with this key is already recorded.
+    pub fn is_done(&self, key: &str) -> bool {
+        self.done.contains(key)
+    }
+
+    /// Number of recorded runs when the store was opened.
+    #[cfg(test)]
+    pub fn done_count(&self) -> usize {
+        self.done.len()
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Appends one finished run: a single write of a whole row, then a flush to the disk.
+    pub fn append(&self, rec: &RunRecord) -> Result<()> {
+        let line = row(rec)?;
+        let mut f = self.file.lock().unwrap_or_else(|e| e.into_inner());
+        f.write_all(line.as_bytes())
+            .with_context(|| format!("appending to {}", self.path.display()))?;
+        f.sync_data()
+            .with_context(|| format!("syncing {}", self.path.display()))?;
+        Ok(())
+    }
+}
+
+/// Every run recorded in `dir` (all `runs*.csv`: the unsharded record and every shard's),
+/// merged, duplicates (the same key in two files) dropped, in key order.
+pub fn load_dir(dir: &Path) -> Result<Vec<RunRecord>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .map(|n| n.starts_with("runs") && n.ends_with(".csv"))
+                .unwrap_or(false)
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        bail!(
+            "{}: no runs*.csv record (run `noisefree sweep --out {}` first)",
+            dir.display(),
+            dir.display()
+        );
+    }
+    let mut by_key = std::collections::BTreeMap::new();
+    for f in files {
+        for r in read_records(&f)?.0 {
+            by_key.entry(r.key()).or_insert(r);
+        }
+    }
+    Ok(by_key.into_values().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rec(seq: &str, seed: u64) -> RunRecord {
+        RunRecord {
+            sequence: seq.into(),
+            config: "mcor".into(),
+            tau_mf: Some(0.7),
+            tau_gf: Some(0.7),
+            tau_mg: Some(0.5),
+            baseline: None,
+            seed,
+            ate_rmse: Some(0.0123),
+            failed: false,
+            frames: 100,
+            tracked: 100,
+            keyframes: 10,
+            map_points: 1000,
+            mean_inliers: 300.5,
+            mean_outliers: 10.25,
+            fps: 80.0,
+            wall_s: 1.25,
+        }
+    }
+
+    fn tmpdir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("nf-store-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        d
+    }
+
+    #[test]
+    fn append_reopen_and_skip() {
+        let d = tmpdir("reopen");
+        let s = RunStore::open(&d, None).unwrap();
+        s.append(&rec("a", 0)).unwrap();
+        s.append(&rec("a", 1)).unwrap();
+        drop(s);
+        let s = RunStore::open(&d, None).unwrap();
+        assert!(s.is_done(&rec("a", 0).key()) && s.is_done(&rec("a", 1).key()));
+        assert!(!s.is_done(&rec("a", 2).key()));
+        let all = load_dir(&d).unwrap();
+        assert_eq!(all, vec![rec("a", 0), rec("a", 1)]);
+    }
+
+    #[test]
+    fn torn_last_line_is_dropped_on_open() {
+        let d = tmpdir("torn");
+        let s = RunStore::open(&d, None).unwrap();
+        s.append(&rec("a", 0)).unwrap();
+        drop(s);
+        let p = d.join("runs.csv");
+        let mut text = std::fs::read_to_string(&p).unwrap();
+        text.push_str("a,mcor,0.7,0.7,0.5,,1,0.01");
+        std::fs::write(&p, text).unwrap();
+        let s = RunStore::open(&d, None).unwrap();
+        assert_eq!(s.done_count(), 1);
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.ends_with('\n'));
+        assert_eq!(text.lines().count(), 2);
+    }
+
+    #[test]
+    fn shards_merge_without_duplicates() {
+        let d = tmpdir("merge");
+        let s1 = RunStore::open(&d, Some(Shard { index: 1, count: 2 })).unwrap();
+        let s2 = RunStore::open(&d, Some(Shard { index: 2, count: 2 })).unwrap();
+        s1.append(&rec("a", 0)).unwrap();
+        s2.append(&rec("a", 1)).unwrap();
+        s2.append(&rec("a", 0)).unwrap(); // the same run recorded twice
+        assert_eq!(load_dir(&d).unwrap().len(), 2);
+    }
+}

@@ -1,0 +1,141 @@
+//! End-to-end test of `noisefree sweep` + `noisefree table` on small synthetic sequences:
+//! the CSV rows, resumption after an interruption (no duplicates, same table), shard merging
+//! (N shards = one unsharded sweep) and the Markdown table.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn noisefree(args: &[&str]) -> std::process::Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_noisefree"))
+        .args(args)
+        .output()
+        .expect("binary runs");
+    assert!(
+        out.status.success(),
+        "noisefree {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("nf-sweep-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+const FRAMES: &str = "40";
+
+fn sweep(out: &Path, extra: &[&str]) {
+    let mut args = vec![
+        "sweep",
+        "--seq",
+        "clean,kinect",
+        "--configs",
+        "orb,mcor",
+        "--runs",
+        "3",
+        "--frames",
+        FRAMES,
+        "--quiet",
+        "--jobs",
+        "2",
+        "--out",
+    ];
+    let o = out.to_str().unwrap();
+    args.push(o);
+    args.extend_from_slice(extra);
+    noisefree(&args);
+}
+
+/// Rows without the timing columns (fps, wall_s), sorted: what must not depend on the machine.
+fn rows(dir: &Path, file: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join(file)).unwrap();
+    let mut v: Vec<String> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').take(15).collect::<Vec<_>>().join(","))
+        .collect();
+    v.sort();
+    v
+}
+
+fn all_rows(dir: &Path) -> Vec<String> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let n = e.unwrap().file_name().to_string_lossy().into_owned();
+        if n.starts_with("runs") && n.ends_with(".csv") {
+            v.extend(rows(dir, &n));
+        }
+    }
+    v.sort();
+    v
+}
+
+#[test]
+fn sweep_resume_shards_and_table() {
+    // A whole sweep in one go.
+    let full = tmpdir("full");
+    sweep(&full, &[]);
+    let full_rows = rows(&full, "runs.csv");
+    assert_eq!(full_rows.len(), 2 * 2 * 3, "{full_rows:#?}");
+    let header = std::fs::read_to_string(full.join("runs.csv")).unwrap();
+    assert!(
+        header.starts_with("sequence,config,tau_mf,tau_gf,tau_mg,baseline,seed,ate_rmse,failed")
+    );
+    for r in &full_rows {
+        let f: Vec<&str> = r.split(',').collect();
+        assert!(["clean", "kinect"].contains(&f[0]));
+        assert!(["orb", "mcor"].contains(&f[1]));
+        assert_eq!(
+            f[2].is_empty(),
+            f[1] == "orb",
+            "thresholds only for mcor: {r}"
+        );
+        let ate: f64 = f[7].parse().expect("ATE recorded");
+        assert!(ate.is_finite() && ate >= 0.0);
+        assert_eq!(f[9], FRAMES);
+    }
+
+    // Interrupted after 5 runs, then resumed: the same rows, none twice.
+    let resumed = tmpdir("resumed");
+    sweep(&resumed, &["--max-runs", "5"]);
+    assert_eq!(rows(&resumed, "runs.csv").len(), 5);
+    sweep(&resumed, &[]);
+    assert_eq!(rows(&resumed, "runs.csv"), full_rows);
+    // A third invocation has nothing left to do.
+    sweep(&resumed, &[]);
+    assert_eq!(rows(&resumed, "runs.csv").len(), 12);
+
+    // Three shards in one folder = the unsharded sweep.
+    let sharded = tmpdir("sharded");
+    for k in 1..=3 {
+        sweep(&sharded, &["--shard", &format!("{k}/3")]);
+    }
+    assert_eq!(all_rows(&sharded), full_rows);
+
+    // Tables: identical Table III from all three folders, in Markdown with both configurations.
+    for d in [&full, &resumed, &sharded] {
+        noisefree(&["table", d.to_str().unwrap()]);
+    }
+    let t_full = std::fs::read_to_string(full.join("table3.md")).unwrap();
+    assert_eq!(
+        t_full,
+        std::fs::read_to_string(resumed.join("table3.md"))
+            .unwrap()
+            .replace(&*resumed.to_string_lossy(), &full.to_string_lossy())
+    );
+    assert_eq!(
+        t_full,
+        std::fs::read_to_string(sharded.join("table3.md")).unwrap()
+    );
+    assert!(
+        t_full.contains("| sequence | class | ORB-SLAM2 (ours) | w/ MC-OR (ours) |"),
+        "{t_full}"
+    );
+    assert!(
+        t_full.contains("| clean | synthetic |") && t_full.contains("| kinect | synthetic |"),
+        "{t_full}"
+    );
+    assert!(full.join("table3.csv").exists() && full.join("table4.md").exists());
+}
