@@ -402,3 +402,93 @@ mod tests {
         }
     }
 }
+
+/// Golden output dump used to prove that speed work leaves the extractor and the frames bit
+/// for bit unchanged. Run before and after a change and diff the two files:
+/// `ORB_GOLDEN_OUT=/tmp/a.txt cargo test -p slam-core golden_dump -- --ignored`.
+#[cfg(test)]
+mod golden {
+    use std::fmt::Write as _;
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::feature::fast::tests::random_image;
+    use crate::feature::test_scene::{test_frame, TestScene};
+    use crate::feature::OrbConfig;
+    use crate::image::GrayImage;
+
+    fn dump_features(out: &mut String, kps: &[KeyPoint], desc: &[Descriptor]) {
+        for (k, d) in kps.iter().zip(desc) {
+            writeln!(
+                out,
+                "{:08x} {:08x} {} {:08x} {} {:016x}{:016x}{:016x}{:016x}",
+                k.x.to_bits(),
+                k.y.to_bits(),
+                k.octave,
+                k.angle.to_bits(),
+                k.response,
+                d[0],
+                d[1],
+                d[2],
+                d[3]
+            )
+            .expect("string write");
+        }
+    }
+
+    #[test]
+    #[ignore = "writes a dump for manual before/after comparison"]
+    fn golden_dump() {
+        let Ok(path) = std::env::var("ORB_GOLDEN_OUT") else {
+            return;
+        };
+        let mut out = String::new();
+        let mut images: Vec<(String, GrayImage)> = Vec::new();
+        for s in 0..6 {
+            images.push((format!("test_frame {s}"), test_frame(s)));
+        }
+        for s in 0..3 {
+            images.push((format!("random 640 {s}"), random_image(640, 480, 100 + s)));
+            images.push((format!("random odd {s}"), random_image(333, 211, 200 + s)));
+            images.push((format!("random wide {s}"), random_image(1403, 257, 400 + s)));
+        }
+        for s in 0..3 {
+            let scene = TestScene::random(640.0, 480.0, 60 + 100 * s as usize, 300 + s);
+            images.push((format!("scene {s}"), scene.render(640, 480, |u, v| (u, v))));
+        }
+        // Low contrast: most cells need the low threshold.
+        let mut dim = test_frame(9);
+        for v in dim.data.iter_mut() {
+            *v = 100 + *v / 10;
+        }
+        images.push(("dim".into(), dim));
+        images.push(("flat".into(), GrayImage::new(200, 150)));
+        for (name, img) in &images {
+            for cfg in [OrbConfig::default(), OrbConfig::stereo()] {
+                let (kps, desc) = OrbExtractor::new(cfg.clone()).extract(img);
+                writeln!(out, "# {name} n={} {}", kps.len(), cfg.n_features).expect("write");
+                dump_features(&mut out, &kps, &desc);
+            }
+        }
+        for s in 0..2 {
+            let scene = TestScene::random(752.0, 480.0, 450, 3 + s);
+            let left = scene.render(752, 480, |u, v| (u, v));
+            let right = scene.render(752, 480, |u, v| (u + 20.0 + 0.03 * v, v));
+            let input = FrameInput {
+                timestamp: 0.0,
+                image: Arc::new(left),
+                depth: None,
+                right: Some(Arc::new(right)),
+            };
+            let cam = stereo::tests::stereo_camera();
+            let mut ex = OrbExtractor::new(OrbConfig::stereo());
+            let f = Frame::new(0, &input, &cam, &mut ex);
+            writeln!(out, "# stereo {s} n={}", f.len()).expect("write");
+            dump_features(&mut out, &f.keypoints, &f.descriptors);
+            for (d, u) in f.depth.iter().zip(&f.u_right) {
+                writeln!(out, "{:08x} {:08x}", d.to_bits(), u.to_bits()).expect("write");
+            }
+        }
+        std::fs::write(path, out).expect("write golden dump");
+    }
+}

@@ -288,7 +288,7 @@ fn window_sum(data: &[u8], w: isize, x0: isize, y0: isize, n: usize) -> i32 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use std::sync::Arc;
 
     use crate::camera::{Camera, SensorKind};

@@ -20,7 +20,8 @@
 //!   linearisation point, like a measurement or a robust weight, and is stored in the residual.
 //!   It is chosen from an estimate of M when the residual is built and can be re-chosen with
 //!   [`VirtualCameraResidual::aim_at`] between optimization rounds (the pose-estimation hook does
-//!   so with the current pose). [`CameraResidual::evaluate`] is then a smooth function of M whose
+//!   so with the current pose before every round; local BA keeps the direction chosen from the
+//!   map before the BA, as it has no between-rounds hook). [`CameraResidual::evaluate`] is then a smooth function of M whose
 //!   analytic Jacobian is exact. Differentiating through the direction was rejected: the
 //!   direction is undefined (and its derivative unbounded, ~1/|DD'_xy|) exactly where the solver
 //!   converges (M on the ray CD), while the cost barely depends on it (|r_3|^2 + |r_4|^2 =

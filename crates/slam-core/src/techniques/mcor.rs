@@ -16,7 +16,9 @@
 //!   current frame's feature), i.e. over the 32 most recent sightings. ORB-SLAM2 map points
 //!   rarely have more than a few dozen keyframe observations, so for almost every point the
 //!   ring *is* the whole cluster and Eq. 1-6 hold exactly. Memory per cluster: at most
-//!   32 x 56 bytes + 40 bytes.
+//!   32 x 56 bytes + 64 bytes. (The system does not even store clusters: it derives each one
+//!   from the map point's keyframe observations when a frame is gated, see
+//!   [`crate::module::pose_estimation`].)
 //! - **Observer poses move.** Ring features keep their camera-frame back-projection and a
 //!   `source` tag (the observing keyframe id), so [`McorCluster::relocate`] can re-place them
 //!   with the current poses after bundle adjustment moved keyframes. Folded features stay where
