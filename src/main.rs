@@ -2,6 +2,7 @@
 //! files, shows progress and prints reports; all the work lives in the library crates
 //! (`slam-core`, `ate-eval`, `datasets`, `synth`).
 
+mod analysis;
 mod commands;
 mod config_file;
 mod figures;
@@ -30,6 +31,8 @@ enum Command {
     Sweep(commands::sweep::SweepArgs),
     /// Turn sweep records into the paper's tables (Markdown + CSV).
     Table(commands::table::TableArgs),
+    /// The paper's analyses of MC-OR and AVC (Table II correlations, Fig. 7 / Fig. 8).
+    Analyze(commands::analyze::AnalyzeArgs),
     /// ATE / RPE of an estimated trajectory against ground truth (like evo_ape / evaluate_ate.py).
     Eval(commands::eval::EvalArgs),
     /// Generate a synthetic RGB-D or stereo sequence (TUM or EuRoC layout) with exact ground truth.
@@ -46,6 +49,7 @@ fn main() -> ExitCode {
         Command::Run(a) => commands::run::run(a),
         Command::Sweep(a) => commands::sweep::run(a),
         Command::Table(a) => commands::table::run(a),
+        Command::Analyze(a) => commands::analyze::run(a),
         Command::Eval(a) => commands::eval::run(a),
         Command::Synth(a) => commands::synth::run(a),
         Command::Fetch(a) => commands::fetch::run(a),

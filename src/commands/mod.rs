@@ -1,5 +1,6 @@
 //! One module per subcommand: its clap arguments and its `run` function.
 
+pub mod analyze;
 pub mod eval;
 pub mod features;
 pub mod fetch;

@@ -14,6 +14,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use slam_core::system::Config;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// Arguments of `noisefree sweep`.
@@ -77,6 +78,11 @@ pub struct SweepArgs {
     /// Data root for real sequences [default: $NOISEFREE_DATA, else ./data].
     #[arg(long = "data-dir", value_name = "DIR")]
     pub data_dir: Option<PathBuf>,
+    /// Synthetic sequences: run k uses its own realization of the sequence (synth seed
+    /// --synth-seed + k: other textures and noise draws), so the spread over runs measures the
+    /// sensitivity to the noise rather than only to RANSAC.
+    #[arg(long = "vary-sequence")]
+    pub vary_sequence: bool,
     /// Stop after this many runs have finished in this invocation (for testing resumption).
     #[arg(long = "max-runs", value_name = "N", hide = true)]
     pub max_runs: Option<usize>,
@@ -189,7 +195,23 @@ pub fn run(args: SweepArgs) -> Result<()> {
         None => Shard::from_slurm(|k| std::env::var(k).ok())?,
     };
     let labels: Vec<String> = srcs.iter().map(Source::label).collect();
-    let all_jobs = expand(&labels, &kinds, &grids, args.runs);
+    let mut all_jobs = expand(&labels, &kinds, &grids, args.runs);
+    for job in &mut all_jobs {
+        let synthetic = catalog
+            .get(&job.sequence)
+            .map(|e| e.preset.is_some())
+            .unwrap_or(false)
+            && srcs
+                .iter()
+                .any(|s| *s == Source::Catalog(job.sequence.clone()));
+        if synthetic {
+            job.synth_seed = Some(if args.vary_sequence {
+                args.synth_seed + job.seed
+            } else {
+                args.synth_seed
+            });
+        }
+    }
     let store = RunStore::open(&args.out, shard)?;
     let mine: Vec<&Job> = all_jobs
         .iter()
@@ -243,97 +265,123 @@ pub fn run(args: SweepArgs) -> Result<()> {
             .copied()
             .filter(|j| &j.sequence == label && !store.is_done(&j.key()))
             .collect();
-        if jobs.is_empty() || started_runs.load(std::sync::atomic::Ordering::SeqCst) >= max_runs {
-            continue;
+        // One decoded sequence per realization (synthetic with --vary-sequence: one per seed).
+        let mut groups: std::collections::BTreeMap<Option<u64>, Vec<&Job>> = Default::default();
+        for j in jobs {
+            groups.entry(j.synth_seed).or_default().push(j);
         }
-        let seq = load(src, &catalog, &load_opts)?;
-        if let Some(gt) = &seq.groundtruth {
-            write_tum(
-                &args
-                    .out
-                    .join("trajectories")
-                    .join(label)
-                    .join("groundtruth.txt"),
-                gt,
-            )?;
-        }
-        let mut base = base_config(seq.camera.sensor);
-        if let Some(p) = &args.config {
-            base = overlay_file(&base, p)?;
-        }
-        let bar = multi.add(ProgressBar::new(jobs.len() as u64));
-        bar.set_style(
-            ProgressStyle::with_template("{prefix:>12} [{bar:40}] {pos}/{len} runs")
-                .expect("static template")
-                .progress_chars("=> "),
-        );
-        bar.set_prefix(label.clone());
-        let results: Vec<Result<()>> = pool.install(|| {
-            jobs.par_iter()
-                .map(|job| {
-                    // Reserve a slot first, so parallel runs never overshoot --max-runs.
-                    if started_runs.fetch_add(1, std::sync::atomic::Ordering::SeqCst) >= max_runs {
-                        return Ok(());
-                    }
-                    let cfg = job_config(&base, job);
-                    let o = run_sequence(&seq, &cfg, |_| {});
-                    let dir = args.out.join("trajectories").join(label).join(job_tag(job));
-                    // Stored in the ground truth's frame (EuRoC: body), ready for figures.
-                    let est = match &seq.t_bs {
-                        Some(t_bs) => o.trajectory.cam_to_body(t_bs),
-                        None => o.trajectory.clone(),
-                    };
-                    write_tum(&dir.join(format!("seed{}.txt", job.seed)), &est)?;
-                    if job.seed == 0 {
-                        let mut w = csv::Writer::from_writer(Vec::new());
-                        for s in &o.stats {
-                            w.serialize(s)?;
+        for (synth_seed, jobs) in groups {
+            if started_runs.load(Ordering::SeqCst) >= max_runs {
+                break;
+            }
+            let opts = LoadOptions {
+                synth_seed: synth_seed.unwrap_or(args.synth_seed),
+                ..load_opts.clone()
+            };
+            let seq = load(src, &catalog, &opts)?;
+            if let Some(gt) = &seq.groundtruth {
+                // The figures draw seed 0; its realization's ground truth goes beside it.
+                if jobs.iter().any(|j| j.seed == 0) {
+                    write_tum(
+                        &args
+                            .out
+                            .join("trajectories")
+                            .join(label)
+                            .join("groundtruth.txt"),
+                        gt,
+                    )?;
+                }
+            }
+            let mut base = base_config(seq.camera.sensor);
+            if let Some(p) = &args.config {
+                base = overlay_file(&base, p)?;
+            }
+            let bar = multi.add(ProgressBar::new(jobs.len() as u64));
+            bar.set_style(
+                ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} runs")
+                    .expect("static template")
+                    .progress_chars("=> "),
+            );
+            bar.set_prefix(match synth_seed {
+                Some(s) if args.vary_sequence => format!("{label} s{s}"),
+                _ => label.clone(),
+            });
+            let results: Vec<Result<()>> = pool.install(|| {
+                jobs.par_iter()
+                    .map(|job| {
+                        // Reserve a slot first, so parallel runs never overshoot --max-runs.
+                        if started_runs.fetch_add(1, Ordering::SeqCst) >= max_runs {
+                            return Ok(());
                         }
-                        write_atomic(&dir.join("frames_seed0.csv"), &w.into_inner()?)?;
-                    }
-                    let (mean_inliers, mean_outliers) = o.mean_inliers_outliers();
-                    let rec = RunRecord {
-                        sequence: label.clone(),
-                        config: job.kind.name().to_string(),
-                        tau_mf: job.params.tau_mf,
-                        tau_gf: job.params.tau_gf,
-                        tau_mg: job.params.tau_mg,
-                        baseline: job.params.baseline,
-                        seed: job.seed,
-                        ate_rmse: o.ate_rmse(),
-                        failed: o.failed,
-                        frames: o.frames,
-                        tracked: o.tracked,
-                        keyframes: o.keyframes,
-                        map_points: o.map_points,
-                        mean_inliers,
-                        mean_outliers,
-                        fps: o.fps(),
-                        wall_s: o.wall_s,
-                    };
-                    store.append(&rec)?;
-                    finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    bar.inc(1);
-                    overall.inc(1);
-                    Ok(())
-                })
-                .collect()
-        });
-        bar.finish_and_clear();
-        for r in results {
-            r?;
+                        let rec = run_job(&seq, &base, job, &args.out)?;
+                        store.append(&rec)?;
+                        finished.fetch_add(1, Ordering::SeqCst);
+                        bar.inc(1);
+                        overall.inc(1);
+                        Ok(())
+                    })
+                    .collect()
+            });
+            bar.finish_and_clear();
+            for r in results {
+                r?;
+            }
         }
     }
     overall.finish_and_clear();
     if !args.quiet {
         eprintln!(
             "{} runs finished in {:.1} s; records in {}",
-            finished.load(std::sync::atomic::Ordering::SeqCst),
+            finished.load(Ordering::SeqCst),
             started.elapsed().as_secs_f64(),
             store.path().display()
         );
     }
     Ok(())
+}
+
+/// Runs one job on a decoded sequence, writes its trajectory (in the ground truth's frame, for
+/// the figures) and, for seed 0, its per-frame statistics; returns its record.
+fn run_job(seq: &datasets::Sequence, base: &Config, job: &Job, out: &Path) -> Result<RunRecord> {
+    let cfg = job_config(base, job);
+    let o = run_sequence(seq, &cfg, |_| {});
+    let dir = out
+        .join("trajectories")
+        .join(&job.sequence)
+        .join(job_tag(job));
+    let est = match &seq.t_bs {
+        Some(t_bs) => o.trajectory.cam_to_body(t_bs),
+        None => o.trajectory.clone(),
+    };
+    write_tum(&dir.join(format!("seed{}.txt", job.seed)), &est)?;
+    if job.seed == 0 {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for s in &o.stats {
+            w.serialize(s)?;
+        }
+        write_atomic(&dir.join("frames_seed0.csv"), &w.into_inner()?)?;
+    }
+    let (mean_inliers, mean_outliers) = o.mean_inliers_outliers();
+    Ok(RunRecord {
+        sequence: job.sequence.clone(),
+        config: job.kind.name().to_string(),
+        tau_mf: job.params.tau_mf,
+        tau_gf: job.params.tau_gf,
+        tau_mg: job.params.tau_mg,
+        baseline: job.params.baseline,
+        seed: job.seed,
+        ate_rmse: o.ate_rmse(),
+        failed: o.failed,
+        frames: o.frames,
+        tracked: o.tracked,
+        keyframes: o.keyframes,
+        map_points: o.map_points,
+        mean_inliers,
+        mean_outliers,
+        fps: o.fps(),
+        wall_s: o.wall_s,
+        synth_seed: job.synth_seed,
+    })
 }
 
 /// Whether a folder looks like a sweep output (has a runs*.csv).

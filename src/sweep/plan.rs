@@ -88,12 +88,21 @@ pub struct Job {
     pub params: Params,
     /// Seed of the run.
     pub seed: u64,
+    /// Synthetic sequences: the seed of the sequence realization (scene textures and noise);
+    /// `None` for real sequences.
+    pub synth_seed: Option<u64>,
 }
 
 impl Job {
     /// The identity of a run in `runs.csv`: a re-run with the same key is skipped.
     pub fn key(&self) -> String {
-        run_key(&self.sequence, self.kind.name(), &self.params, self.seed)
+        run_key(
+            &self.sequence,
+            self.kind.name(),
+            &self.params,
+            self.seed,
+            self.synth_seed,
+        )
     }
 }
 
@@ -102,13 +111,20 @@ fn fmt_opt(v: Option<f64>) -> String {
 }
 
 /// The key of a run from its fields (shared by [`Job::key`] and the CSV records).
-pub fn run_key(sequence: &str, config: &str, p: &Params, seed: u64) -> String {
+pub fn run_key(
+    sequence: &str,
+    config: &str,
+    p: &Params,
+    seed: u64,
+    synth_seed: Option<u64>,
+) -> String {
     format!(
-        "{sequence}|{config}|{}|{}|{}|{}|{seed}",
+        "{sequence}|{config}|{}|{}|{}|{}|{seed}|{}",
         fmt_opt(p.tau_mf),
         fmt_opt(p.tau_gf),
         fmt_opt(p.tau_mg),
-        fmt_opt(p.baseline)
+        fmt_opt(p.baseline),
+        synth_seed.map(|s| s.to_string()).unwrap_or_default()
     )
 }
 
@@ -167,6 +183,7 @@ pub fn expand(sequences: &[String], kinds: &[ConfigKind], grids: &Grids, runs: u
                         kind,
                         params: p,
                         seed,
+                        synth_seed: None,
                     });
                 }
             }

@@ -50,6 +50,8 @@ pub struct RunRecord {
     pub fps: f64,
     /// Wall time of the run, seconds.
     pub wall_s: f64,
+    /// Synthetic sequences: seed of the sequence realization; empty for real sequences.
+    pub synth_seed: Option<u64>,
 }
 
 impl RunRecord {
@@ -65,7 +67,13 @@ impl RunRecord {
 
     /// The run's identity (same as the job's key).
     pub fn key(&self) -> String {
-        run_key(&self.sequence, &self.config, &self.params(), self.seed)
+        run_key(
+            &self.sequence,
+            &self.config,
+            &self.params(),
+            self.seed,
+            self.synth_seed,
+        )
     }
 }
 
@@ -97,6 +105,7 @@ fn header() -> String {
         "mean_outliers",
         "fps",
         "wall_s",
+        "synth_seed",
     ])
     .expect("in-memory write");
     String::from_utf8(w.into_inner().expect("in-memory")).expect("ascii")
@@ -248,6 +257,7 @@ mod tests {
             mean_outliers: 10.25,
             fps: 80.0,
             wall_s: 1.25,
+            synth_seed: Some(1),
         }
     }
 

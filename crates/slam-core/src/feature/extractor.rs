@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use super::brief::{compute_descriptor, gaussian_blur};
 use super::distribute::{distribute, QuadScratch};
-use super::fast::{detect, Corner, FastScratch, Rect};
+use super::fast::{detect_adaptive, CellLayout, Corner, FastScratch, Rect};
 use super::orientation::{ic_angle, CirclePatch};
 use super::pyramid::{Pyramid, ScaleInfo};
 use super::{Descriptor, KeyPoint, EDGE_THRESHOLD};
@@ -260,47 +260,22 @@ pub fn detect_level(
         x1: w - e,
         y1: h - e,
     };
-    detect(lvl, area, ini_th, scratch, out);
     // Cells as ORB-SLAM2 lays them out over [16, dim - 16]: floor(dim / 30) of them, each
     // ceil(dim / n) wide; detection inside a cell is 3 px in from the cell window.
     let (aw, ah) = (w - 2 * (e - 3), h - 2 * (e - 3));
     let n_cols = (aw / CELL_SIZE).max(1);
     let n_rows = (ah / CELL_SIZE).max(1);
-    let cw = aw.div_ceil(n_cols);
-    let ch = ah.div_ceil(n_rows);
-    cell_counts.clear();
-    cell_counts.resize(n_cols * n_rows, 0);
-    for c in out.iter() {
-        let i = ((c.x as usize - e) / cw).min(n_cols - 1);
-        let j = ((c.y as usize - e) / ch).min(n_rows - 1);
-        cell_counts[j * n_cols + i] += 1;
-    }
-    let n_high = out.len();
-    for j in 0..n_rows {
-        for i in 0..n_cols {
-            if cell_counts[j * n_cols + i] > 0 {
-                continue;
-            }
-            let rect = Rect {
-                x0: e + i * cw,
-                y0: e + j * ch,
-                x1: if i + 1 == n_cols {
-                    w - e
-                } else {
-                    e + (i + 1) * cw
-                },
-                y1: if j + 1 == n_rows {
-                    h - e
-                } else {
-                    e + (j + 1) * ch
-                },
-            };
-            detect(lvl, rect, min_th, scratch, out);
-        }
-    }
-    if out.len() > n_high {
-        out.sort_unstable();
-    }
+    let cells = CellLayout {
+        x0: e,
+        y0: e,
+        cw: aw.div_ceil(n_cols),
+        ch: ah.div_ceil(n_rows),
+        n_cols,
+        n_rows,
+        x_end: w - e,
+        y_end: h - e,
+    };
+    detect_adaptive(lvl, area, &cells, ini_th, min_th, scratch, cell_counts, out);
 }
 
 #[cfg(test)]

@@ -66,12 +66,15 @@ impl ScaleInfo {
 pub struct Pyramid {
     /// Level `l` is the input resized by `1 / scale_factor^l`; level 0 is a copy of the input.
     pub levels: Vec<GrayImage>,
-    /// Scratch: horizontally interpolated source rows (fixed point, weights of 128).
-    row_a: Vec<u32>,
-    row_b: Vec<u32>,
-    /// Scratch: per destination column, the left source column and its weight.
+    /// Scratch: horizontally interpolated source rows (fixed point, weights of 128; at most
+    /// 255 * 128, so 16 bits suffice and the vertical products vectorize as 16-bit multiplies).
+    row_a: Vec<u16>,
+    row_b: Vec<u16>,
+    /// Scratch: per destination column, the left source column, the right one (clamped) and
+    /// the right one's weight.
     col_x0: Vec<u32>,
-    col_w: Vec<u32>,
+    col_x1: Vec<u32>,
+    col_w: Vec<u16>,
 }
 
 /// Fixed-point precision of the bilinear weights: weights sum to `1 << RESIZE_BITS`.
@@ -104,6 +107,7 @@ impl Pyramid {
                 &mut self.row_a,
                 &mut self.row_b,
                 &mut self.col_x0,
+                &mut self.col_x1,
                 &mut self.col_w,
             );
             prev = level;
@@ -120,10 +124,11 @@ fn resize_bilinear(
     dst: &mut GrayImage,
     w: usize,
     h: usize,
-    row_a: &mut Vec<u32>,
-    row_b: &mut Vec<u32>,
+    row_a: &mut Vec<u16>,
+    row_b: &mut Vec<u16>,
     col_x0: &mut Vec<u32>,
-    col_w: &mut Vec<u32>,
+    col_x1: &mut Vec<u32>,
+    col_w: &mut Vec<u16>,
 ) {
     dst.width = w;
     dst.height = h;
@@ -131,12 +136,14 @@ fn resize_bilinear(
     let (sw, sh) = (src.width, src.height);
     // Column table: left source column (clamped so x0 + 1 stays inside) and right weight.
     col_x0.clear();
+    col_x1.clear();
     col_w.clear();
     let sx = sw as f64 / w as f64;
     for x in 0..w {
         let (x0, f) = sample_pos(x, sx, sw);
         col_x0.push(x0 as u32);
-        col_w.push(f);
+        col_x1.push((x0 + 1).min(sw - 1) as u32);
+        col_w.push(f as u16);
     }
     row_a.resize(w, 0);
     row_b.resize(w, 0);
@@ -151,20 +158,21 @@ fn resize_bilinear(
                 std::mem::swap(row_a, row_b);
                 std::mem::swap(&mut have_a, &mut have_b);
             } else {
-                hinterp(src.row(y0), col_x0, col_w, row_a);
+                hinterp(src.row(y0), col_x0, col_x1, col_w, row_a);
                 have_a = y0;
             }
         }
         if have_b != y1 {
-            hinterp(src.row(y1), col_x0, col_w, row_b);
+            hinterp(src.row(y1), col_x0, col_x1, col_w, row_b);
             have_b = y1;
         }
-        let gy1 = fy;
-        let gy0 = RESIZE_ONE - fy;
+        let gy1 = fy as u16;
+        let gy0 = (RESIZE_ONE - fy) as u16;
         let out = &mut dst.data[y * w..(y + 1) * w];
         let half = 1u32 << (2 * RESIZE_BITS - 1);
         for ((o, &a), &b) in out.iter_mut().zip(row_a.iter()).zip(row_b.iter()) {
-            *o = ((a * gy0 + b * gy1 + half) >> (2 * RESIZE_BITS)) as u8;
+            let v = a as u32 * gy0 as u32 + b as u32 * gy1 as u32 + half;
+            *o = (v >> (2 * RESIZE_BITS)) as u8;
         }
     }
 }
@@ -185,13 +193,12 @@ fn sample_pos(i: usize, s: f64, n: usize) -> (usize, u32) {
 
 /// Horizontal interpolation of one source row into `out` (fixed point, times 128).
 #[inline]
-fn hinterp(row: &[u8], col_x0: &[u32], col_w: &[u32], out: &mut [u32]) {
-    let last = row.len() - 1;
-    for ((o, &x0), &f) in out.iter_mut().zip(col_x0).zip(col_w) {
-        let x0 = x0 as usize;
-        let a = row[x0] as u32;
-        let b = row[(x0 + 1).min(last)] as u32;
-        *o = a * (RESIZE_ONE - f) + b * f;
+fn hinterp(row: &[u8], col_x0: &[u32], col_x1: &[u32], col_w: &[u16], out: &mut [u16]) {
+    let one = RESIZE_ONE as u16;
+    for (((o, &x0), &x1), &f) in out.iter_mut().zip(col_x0).zip(col_x1).zip(col_w) {
+        let a = row[x0 as usize] as u16;
+        let b = row[x1 as usize] as u16;
+        *o = a * (one - f) + b * f;
     }
 }
 

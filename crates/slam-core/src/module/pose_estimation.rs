@@ -18,16 +18,19 @@
 //! moves between rounds. MC-OR gates pose-only optimization only (the paper: it acts "before
 //! every run of the pose optimization block"); local BA keeps ORB-SLAM2's chi2 outlier erasure.
 
+use std::cell::RefCell;
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::noise::{AvcParams, McorParams};
 use crate::camera::Camera;
+use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
 use crate::optimize::{pose_optimization_with, Measurement, PoseObservation, PoseOptConfig};
 use crate::techniques::{
-    mcor_gate, ClusterFeature, McorCluster, McorMatch, McorOutcome, VirtualCameraResidual,
+    mcor_gate, ClusterFeature, McorCluster, McorMatch, McorOutcome, McorVerdict,
+    VirtualCameraResidual,
 };
 
 /// `t` with its rotation quaternion renormalised. Products of unit quaternions drift off unit
@@ -173,6 +176,78 @@ pub struct PoseOptCounts {
     pub n_mcor_rejected_features: usize,
 }
 
+/// One match of a [`PoseOptRecord`]: what the optimizer saw and decided for it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseOptMatch {
+    /// Keypoint index in the frame.
+    pub keypoint: usize,
+    /// The matched map point.
+    pub map_point: MapPointId,
+    /// Its position (world frame, metres) as the optimizer used it.
+    pub point_world: Vector3<f64>,
+    /// Inlier at the final pose (not a chi2 outlier, not excluded by MC-OR).
+    pub inlier: bool,
+    /// MC-OR's verdict at the last gating (before the last round); `None` when MC-OR is off.
+    pub mcor: Option<McorVerdict>,
+}
+
+/// What one call of [`optimize_frame_pose`] did, as recorded by [`tap_pose_optimizations`]:
+/// the data behind the paper's Fig. 7 (rejected features of a frame) and Table II (error terms
+/// of the observations at the estimated pose), which the system's per-frame statistics only
+/// count and which tracking erases (outliers are unmatched once a frame is done).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseOptRecord {
+    /// Frame counter of the optimized frame.
+    pub frame_id: u64,
+    /// The optimized pose (world -> camera).
+    pub tcw: Isometry3<f64>,
+    /// Every match that entered the optimization, in keypoint order.
+    pub matches: Vec<PoseOptMatch>,
+}
+
+thread_local! {
+    /// Records of the active [`tap_pose_optimizations`] on this thread, if any.
+    static POSE_OPT_TAP: RefCell<Option<Vec<PoseOptRecord>>> = const { RefCell::new(None) };
+}
+
+/// Restores the enclosing tap (if any) when a tapped call ends, even by unwinding.
+struct TapGuard(Option<Vec<PoseOptRecord>>);
+
+impl Drop for TapGuard {
+    fn drop(&mut self) {
+        let outer = self.0.take();
+        POSE_OPT_TAP.with(|t| *t.borrow_mut() = outer);
+    }
+}
+
+/// Analysis tap: runs `f` and returns, with its result, a record of every [`optimize_frame_pose`]
+/// call it made on this thread (in call order; the last record of a tracked frame is its final,
+/// local-map optimization). The system runs synchronously on the caller's thread, so wrapping
+/// `System::track` captures that frame's optimizations. Costs one thread-local check per
+/// optimization when no tap is active. Nested taps each see only their own calls.
+pub fn tap_pose_optimizations<R>(f: impl FnOnce() -> R) -> (R, Vec<PoseOptRecord>) {
+    let outer = POSE_OPT_TAP.with(|t| t.borrow_mut().replace(Vec::new()));
+    let guard = TapGuard(outer);
+    let r = f();
+    let records = POSE_OPT_TAP
+        .with(|t| t.borrow_mut().take())
+        .unwrap_or_default();
+    drop(guard);
+    (r, records)
+}
+
+fn tap_active() -> bool {
+    POSE_OPT_TAP.with(|t| t.borrow().is_some())
+}
+
+fn tap_push(record: PoseOptRecord) {
+    POSE_OPT_TAP.with(|t| {
+        if let Some(v) = t.borrow_mut().as_mut() {
+            v.push(record);
+        }
+    });
+}
+
 /// Optimizes `frame.tcw` (must be set) against its matched map points and sets
 /// `frame.outliers`. Returns the match / inlier counts. With fewer than 3 matches the pose is
 /// left unchanged (ORB-SLAM2 returns 0 inliers then).
@@ -229,6 +304,8 @@ pub fn optimize_frame_pose(
         .map(|&i| frame.features.unproject_camera(i, camera))
         .collect();
     let mut last_gate = (0, 0);
+    let mut last_verdicts: Option<Vec<McorVerdict>> = None;
+    let tapped = tap_active();
     // Hook point 2, before every round with the latest pose: re-aim the virtual cameras, then
     // re-run MC-OR (an observation rejected at a poor early pose may come back).
     let mut gate = |_round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
@@ -251,12 +328,32 @@ pub fn optimize_frame_pose(
                 *e = !outcome.kept(k);
             }
             last_gate = (outcome.n_rejected_clusters, outcome.n_rejected_features);
+            if tapped {
+                last_verdicts = Some(outcome.verdicts);
+            }
         }
     };
     let result = pose_optimization_with(camera, &initial, &obs, cfg, &mut gate);
     frame.tcw = Some(renormalized(&result.pose));
     for (k, &i) in index.iter().enumerate() {
         frame.outliers[i] = !result.inliers[k];
+    }
+    if tapped {
+        tap_push(PoseOptRecord {
+            frame_id: frame.id,
+            tcw: frame.tcw.expect("just set"),
+            matches: index
+                .iter()
+                .enumerate()
+                .map(|(k, &i)| PoseOptMatch {
+                    keypoint: i,
+                    map_point: frame.map_points[i].expect("matched"),
+                    point_world: obs[k].point_world,
+                    inlier: result.inliers[k],
+                    mcor: last_verdicts.as_ref().map(|v| v[k]),
+                })
+                .collect(),
+        });
     }
     PoseOptCounts {
         n_matches: obs.len(),
@@ -463,5 +560,58 @@ mod tests {
         );
         assert!(counts.n_inliers >= 115, "{counts:?}");
         assert!(error_m(&frame.tcw.unwrap()) < 0.005);
+    }
+
+    #[test]
+    fn tap_records_the_gate_verdicts_and_inliers() {
+        let gross = [3, 17, 40];
+        let (camera, map, mut frame, _) = scene(&gross);
+        frame.tcw = Some(start_pose());
+        let params = McorParams::default();
+        let hooks = NoiseHooks {
+            mcor: Some(&params),
+            avc: None,
+        };
+        let levels = ScaleLevels::new(8, 1.2);
+        let cfg = PoseOptConfig::default();
+        // Untapped calls record nothing, and a tap sees only its own calls.
+        let (counts, records) = tap_pose_optimizations(|| {
+            let c = optimize_frame_pose(&mut frame, &map, &camera, &levels, &cfg, &hooks);
+            let (_, inner) = tap_pose_optimizations(|| ());
+            assert!(inner.is_empty());
+            c
+        });
+        assert_eq!(records.len(), 1);
+        let r = &records[0];
+        assert_eq!(r.frame_id, frame.id);
+        assert_eq!(r.tcw, frame.tcw.unwrap());
+        assert_eq!(r.matches.len(), counts.n_matches);
+        assert_eq!(
+            r.matches.iter().filter(|m| m.inlier).count(),
+            counts.n_inliers
+        );
+        let rejected: Vec<usize> = r
+            .matches
+            .iter()
+            .filter(|m| m.mcor == Some(McorVerdict::RejectedFeature))
+            .map(|m| m.keypoint)
+            .collect();
+        assert_eq!(rejected, gross);
+        for m in &r.matches {
+            assert_eq!(frame.outliers[m.keypoint], !m.inlier);
+        }
+        // Without MC-OR the verdicts are absent; after the tap nothing is recorded.
+        let (_, records) = tap_pose_optimizations(|| {
+            optimize_frame_pose(
+                &mut frame,
+                &map,
+                &camera,
+                &levels,
+                &cfg,
+                &NoiseHooks::default(),
+            )
+        });
+        assert!(records[0].matches.iter().all(|m| m.mcor.is_none()));
+        assert!(!tap_active());
     }
 }

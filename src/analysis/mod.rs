@@ -1,0 +1,14 @@
+//! The paper's analyses of MC-OR and AVC on synthetic sequences, where the truth is known
+//! (`noisefree analyze`):
+//! - [`stream`]: frames of a synthetic sequence generated in parallel chunks and fed in order,
+//!   so memory stays bounded whatever the length;
+//! - [`correlation`]: Table II — correlations of the virtual-camera error terms with the
+//!   z-normalised 3-D error, the 2-D projective errors and the *true* depth error;
+//! - [`outliers`]: Fig. 8 (inliers / outliers per frame with and without MC-OR) and Fig. 7 (one
+//!   frame with the features MC-OR rejected);
+//! - [`figures`]: the drawings of both.
+
+pub mod correlation;
+pub mod figures;
+pub mod outliers;
+pub mod stream;

@@ -1,0 +1,134 @@
+//! End-to-end tests of `noisefree analyze`: both analyses on a short synthetic sequence write
+//! their files, and the Table II correlations are finite and within [-1, 1].
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn noisefree(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_noisefree"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("nf-analyze-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn correlation_writes_table_two_with_valid_coefficients() {
+    let d = tmpdir("corr");
+    let out = noisefree(&[
+        "analyze",
+        "correlation",
+        "--preset",
+        "kinect",
+        "--frames",
+        "40",
+        "--quiet",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    ok(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("| e_BASE,z |"), "{stdout}");
+    let md = std::fs::read_to_string(d.join("table2_kinect.md")).unwrap();
+    assert!(
+        md.contains("## Definitions") && md.contains("(dx, dy)"),
+        "{md}"
+    );
+    let csv = std::fs::read_to_string(d.join("table2_kinect.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("subset,statistic,row,column,value,n"));
+    let mut defined = 0;
+    for line in lines {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(fields.len(), 6, "{line}");
+        assert!(fields[5].parse::<usize>().unwrap() > 100, "{line}");
+        if fields[4].is_empty() {
+            continue;
+        }
+        let r: f64 = fields[4].parse().unwrap();
+        assert!(r.is_finite() && (-1.0..=1.0).contains(&r), "{line}");
+        defined += 1;
+    }
+    // 4 tables x 19 cells; on Kinect-like data every series varies.
+    assert_eq!(defined, 4 * 19, "{csv}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn outliers_writes_counts_and_figures() {
+    let d = tmpdir("out");
+    let out = noisefree(&[
+        "analyze",
+        "outliers",
+        "--preset",
+        "walking",
+        "--frames",
+        "40",
+        "--quiet",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    ok(&out);
+    let csv = std::fs::read_to_string(d.join("outliers_walking.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    assert!(
+        header.starts_with("frame,timestamp,orb_tracked"),
+        "{header}"
+    );
+    assert_eq!(lines.count(), 40);
+    for f in [
+        "fig8_walking.png",
+        "fig8_walking.svg",
+        "fig7_walking.png",
+        "outliers_walking.md",
+    ] {
+        let len = std::fs::metadata(d.join(f)).unwrap().len();
+        assert!(len > 1000, "{f}: {len} bytes");
+    }
+    // Fig. 7 is the 2x picture plus its legend strip.
+    let (w, h) = image_size(&d.join("fig7_walking.png"));
+    assert_eq!((w, h), (1280, 960 + 70));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn bad_arguments_fail_cleanly() {
+    let d = tmpdir("bad");
+    let out = noisefree(&[
+        "analyze",
+        "correlation",
+        "--preset",
+        "nope",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nope"));
+    let out = noisefree(&[
+        "analyze", "outliers", "--preset", "kinect", "--frames", "5", "--frame", "9",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--frame 9"));
+}
+
+/// Width and height from a PNG's IHDR chunk.
+fn image_size(path: &std::path::Path) -> (u32, u32) {
+    let b = std::fs::read(path).unwrap();
+    assert_eq!(&b[1..4], b"PNG");
+    let be = |o: usize| u32::from_be_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
+    (be(16), be(20))
+}
