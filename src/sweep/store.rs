@@ -50,7 +50,9 @@ pub struct RunRecord {
     pub fps: f64,
     /// Wall time of the run, seconds.
     pub wall_s: f64,
-    /// Synthetic sequences: seed of the sequence realization; empty for real sequences.
+    /// Synthetic sequences: seed of the sequence realization; empty for real sequences (and
+    /// absent from records written before the column existed).
+    #[serde(default)]
     pub synth_seed: Option<u64>,
 }
 
