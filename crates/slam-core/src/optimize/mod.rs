@@ -10,12 +10,12 @@
 mod lm;
 mod local_ba;
 #[cfg(test)]
-mod numdiff;
+pub(crate) mod numdiff;
 mod pose_only;
 mod residual;
 mod robust;
 #[cfg(test)]
-mod test_scene;
+pub(crate) mod test_scene;
 
 pub use local_ba::{
     local_bundle_adjustment, BaConfig, BaKeyFrame, BaObservation, BaPoint, BaProblem, BaReport,
