@@ -154,6 +154,19 @@ impl StampChecker<'_> {
     }
 }
 
+/// The result of a reader: an error for a file without any pose, else the poses and repairs.
+fn loaded(path: &Path, trajectory: Trajectory, warnings: Vec<Warning>) -> Result<Loaded> {
+    if trajectory.is_empty() {
+        return Err(Error::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(Loaded {
+        trajectory,
+        warnings,
+    })
+}
+
 /// Reads a TUM trajectory, returning the repairs made as warnings.
 pub fn read_tum_loaded(path: &Path) -> Result<Loaded> {
     let text = read_text(path)?;
@@ -187,15 +200,7 @@ pub fn read_tum_loaded(path: &Path) -> Result<Loaded> {
             Isometry3::from_parts(Translation3::new(v[1], v[2], v[3]), q),
         );
     }
-    if traj.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(Loaded {
-        trajectory: traj,
-        warnings,
-    })
+    loaded(path, traj, warnings)
 }
 
 /// Reads a TUM trajectory (`timestamp tx ty tz qx qy qz qw`).
@@ -240,15 +245,7 @@ pub fn read_euroc_loaded(path: &Path) -> Result<Loaded> {
             Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), q),
         );
     }
-    if traj.is_empty() {
-        return Err(Error::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(Loaded {
-        trajectory: traj,
-        warnings,
-    })
+    loaded(path, traj, warnings)
 }
 
 /// Reads an EuRoC ground-truth CSV (`state_groundtruth_estimate0/data.csv`).

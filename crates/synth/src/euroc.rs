@@ -93,14 +93,7 @@ pub fn write_euroc(
             "the EuRoC layout needs a stereo configuration (use write_tum for RGB-D)".into(),
         ));
     }
-    let staging = Staging::new(dir)?;
-    match write_into(gen, n, &staging.tmp, &progress) {
-        Ok(()) => staging.commit(),
-        Err(e) => {
-            staging.abort();
-            Err(e)
-        }
-    }
+    Staging::write_atomically(dir, |tmp| write_into(gen, n, tmp, &progress))
 }
 
 fn write_into(

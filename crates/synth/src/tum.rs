@@ -49,14 +49,7 @@ pub fn write_tum(
             "the TUM layout needs an RGB-D configuration (use write_euroc for stereo)".into(),
         ));
     }
-    let staging = Staging::new(dir)?;
-    match write_into(gen, n, &staging.tmp, &progress) {
-        Ok(()) => staging.commit(),
-        Err(e) => {
-            staging.abort();
-            Err(e)
-        }
-    }
+    Staging::write_atomically(dir, |tmp| write_into(gen, n, tmp, &progress))
 }
 
 fn write_into(

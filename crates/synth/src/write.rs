@@ -67,6 +67,22 @@ impl Staging {
     pub fn abort(self) {
         let _ = fs::remove_dir_all(&self.tmp);
     }
+
+    /// Writes `target` through a staging folder: `write` fills the folder, which then moves into
+    /// place, or is removed if `write` fails, so a half-written sequence never looks complete.
+    pub fn write_atomically(
+        target: &Path,
+        write: impl FnOnce(&Path) -> Result<(), SynthError>,
+    ) -> Result<(), SynthError> {
+        let staging = Staging::new(target)?;
+        match write(&staging.tmp) {
+            Ok(()) => staging.commit(),
+            Err(e) => {
+                staging.abort();
+                Err(e)
+            }
+        }
+    }
 }
 
 /// Creates a folder (and parents).
