@@ -89,7 +89,41 @@ fn outliers_writes_counts_and_figures() {
         header.starts_with("frame,timestamp,orb_tracked"),
         "{header}"
     );
-    assert_eq!(lines.count(), 40);
+    let columns: Vec<&str> = header.split(',').collect();
+    let col = |name: &str| columns.iter().position(|c| *c == name).unwrap();
+    let (error, moving) = (col("orb_position_error"), col("orb_inliers_on_moving"));
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 40);
+    // The system's world is its first camera: no position error at frame 0.
+    assert!(
+        rows[0][error].parse::<f64>().unwrap() < 1e-9,
+        "{:?}",
+        rows[0]
+    );
+    // People walk through the first second of `walking`: some inliers lie on them.
+    assert!(rows
+        .iter()
+        .any(|r| r[moving].parse::<usize>().unwrap() > 10));
+    // Most of the baseline's inliers are true associations.
+    let md = std::fs::read_to_string(d.join("outliers_walking.md")).unwrap();
+    let row = md
+        .lines()
+        .skip_while(|l| !l.starts_with("## What the matches were"))
+        .find(|l| l.starts_with("| ORB-SLAM2 |"))
+        .unwrap_or_else(|| panic!("{md}"));
+    let correct: f64 = row
+        .split('|')
+        .nth(2)
+        .unwrap()
+        .split('%')
+        .next()
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    assert!(correct > 50.0, "{row}");
     for f in [
         "fig8_walking.png",
         "fig8_walking.svg",

@@ -28,6 +28,8 @@ fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
 pub const BASELINE_COLOR: RGBColor = RGBColor(31, 119, 180);
 /// Red: with MC-OR.
 pub const MCOR_COLOR: RGBColor = RGBColor(214, 39, 40);
+/// Green: matches on moving objects.
+pub const MOVING_COLOR: RGBColor = RGBColor(44, 160, 44);
 /// Orange: MC-OR's rejections (part of its outliers).
 pub const REJECTED_COLOR: RGBColor = RGBColor(255, 127, 14);
 
@@ -37,7 +39,7 @@ pub struct Curve {
     pub label: String,
     /// Line colour.
     pub color: RGBColor,
-    /// One value per frame.
+    /// One value per frame (not finite: no value at that frame).
     pub values: Vec<f64>,
     /// Thin dashed-looking line (drawn as points) instead of a solid one.
     pub thin: bool,
@@ -99,6 +101,7 @@ where
                 .values
                 .iter()
                 .enumerate()
+                .filter(|(_, v)| v.is_finite())
                 .map(|(i, v)| (i as f64, *v))
                 .collect();
             let color = c.color;
@@ -123,14 +126,14 @@ where
     Ok(())
 }
 
-/// Fig. 8: stacked per-frame panels into `<stem>.png` (1000 x 800) and `<stem>.svg`, each
+/// Fig. 8: stacked per-frame panels into `<stem>.png` (1000 wide, 300 high per panel) and `<stem>.svg`, each
 /// through a temporary file and a rename.
 pub fn per_frame_panels(stem: &Path, title: &str, panels: &[Panel]) -> Result<()> {
     register_font();
     if let Some(d) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
     }
-    let size = (1000, 800);
+    let size = (1000, 300 * panels.len().max(1) as u32);
     let tmp_png = stem.with_extension("tmp.png");
     let tmp_svg = stem.with_extension("tmp.svg");
     {

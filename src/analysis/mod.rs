@@ -4,10 +4,12 @@
 //!   so memory stays bounded whatever the length;
 //! - [`correlation`]: Table II — correlations of the virtual-camera error terms with the
 //!   z-normalised 3-D error, the 2-D projective errors and the *true* depth error;
+//! - [`association`]: the truth of each match (same point, mismatch, moving object);
 //! - [`outliers`]: Fig. 8 (inliers / outliers per frame with and without MC-OR) and Fig. 7 (one
 //!   frame with the features MC-OR rejected);
 //! - [`figures`]: the drawings of both.
 
+pub mod association;
 pub mod correlation;
 pub mod figures;
 pub mod outliers;

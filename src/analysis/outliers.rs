@@ -5,15 +5,19 @@
 //! against the truth: the true depth error of rejected versus kept features, and how many lie
 //! on moving objects.
 
+use crate::analysis::association::{
+    classify, Association, AssociationCounts, KeyframeTruth, TrackedTruth,
+};
 use crate::analysis::correlation::{depth_at_raw_pixel, median_abs};
 use crate::analysis::figures::{Mark, MarkedFeature};
 use crate::analysis::stream::{for_each_chunk, frame_input};
 use ate_eval::{evaluate_ate, AteOptions, Trajectory};
-use slam_core::module::pose_estimation::tap_pose_optimizations;
+use nalgebra::Isometry3;
+use slam_core::module::pose_estimation::{tap_pose_optimizations, PoseOptRecord};
 use slam_core::system::{Config, FrameStats, System};
 use slam_core::techniques::McorVerdict;
-use slam_core::GrayImage;
-use synth::Generator;
+use slam_core::{FrameInput, GrayImage};
+use synth::{Generator, SynthFrame};
 
 /// The frame chosen for Fig. 7, with what is needed to draw it.
 #[derive(Clone, Debug)]
@@ -54,6 +58,74 @@ pub struct VerdictTruth {
     pub rejected_on_moving: (usize, usize),
 }
 
+/// The truth about one run's tracking: what its matches were and where its camera was.
+#[derive(Clone, Debug, Default)]
+pub struct RunTruth {
+    /// The final pose optimization's matches of every tracked frame, by inlier / outlier and
+    /// true association.
+    pub associations: AssociationCounts,
+    /// Per frame: distance (metres) of the estimated camera centre from the true one, the
+    /// estimate placed in the truth's world by the first frame's true pose (the system's world
+    /// is its first camera); `None` when not tracked.
+    pub position_errors: Vec<Option<f64>>,
+    /// Per frame: inliers of the final pose optimization on moving objects.
+    pub moving_inliers: Vec<usize>,
+    keyframes: KeyframeTruth,
+}
+
+impl RunTruth {
+    /// Tracks `frame` (as `input`) with `system` under the optimization tap and records the
+    /// truth of the outcome; returns the frame's final pose optimization if it was tracked.
+    fn track(
+        &mut self,
+        system: &mut System,
+        frame: &SynthFrame,
+        input: &FrameInput,
+        origin: &Isometry3<f64>,
+    ) -> Option<PoseOptRecord> {
+        let (result, records) = tap_pose_optimizations(|| system.track(input));
+        let tracked = result.state.is_tracked();
+        let last = system.last_frame().filter(|_| tracked);
+        let camera = system.camera().clone();
+        if let (Some(last), true) = (last, result.stats.keyframe_inserted) {
+            self.keyframes.remember(&camera, frame, &last.features);
+        }
+        self.position_errors
+            .push(last.and_then(|f| f.tcw).map(|tcw| {
+                let estimate = origin * tcw.inverse();
+                (estimate.translation.vector - frame.pose_wc.translation.vector).norm()
+            }));
+        let record = records
+            .into_iter()
+            .rev()
+            .find(|r| r.frame_id == frame.index as u64);
+        let (Some(record), Some(last)) = (record, last) else {
+            self.moving_inliers.push(0);
+            return None;
+        };
+        let truth = TrackedTruth {
+            camera: &camera,
+            frame,
+            features: &last.features,
+            scale_factor: system.config().orb.scale_factor,
+        };
+        let mut moving_inliers = 0;
+        for m in &record.matches {
+            let a = classify(
+                &truth,
+                m.keypoint,
+                system.map(),
+                m.map_point,
+                &self.keyframes,
+            );
+            self.associations.add(m.inlier, a);
+            moving_inliers += usize::from(m.inlier && a == Association::Moving);
+        }
+        self.moving_inliers.push(moving_inliers);
+        Some(record)
+    }
+}
+
 /// What an outlier analysis produced.
 #[derive(Clone, Debug)]
 pub struct OutlierData {
@@ -67,6 +139,8 @@ pub struct OutlierData {
     pub fig7: Option<Fig7Frame>,
     /// The verdicts against the truth.
     pub truth: VerdictTruth,
+    /// The baseline's and the MC-OR run's matches and positions against the truth.
+    pub runs: (RunTruth, RunTruth),
 }
 
 fn ate_of(system: &System, gt: &Trajectory) -> Option<f64> {
@@ -103,6 +177,8 @@ pub fn collect(
     let mut fig7: Option<Fig7Frame> = None;
     let mut truth = VerdictTruth::default();
     let mut gt = Trajectory::new();
+    let origin = generator.pose(0);
+    let (mut base_truth, mut mcor_truth) = (RunTruth::default(), RunTruth::default());
     for_each_chunk(generator, n, |chunk| {
         let inputs: Vec<_> = chunk.iter().map(frame_input).collect();
         for f in &chunk {
@@ -110,23 +186,16 @@ pub fn collect(
         }
         rayon::join(
             || {
-                for input in &inputs {
-                    baseline.track(input);
+                for (frame, input) in chunk.iter().zip(&inputs) {
+                    base_truth.track(&mut baseline, frame, input, &origin);
                 }
             },
             || {
                 for (frame, input) in chunk.iter().zip(&inputs) {
-                    let (result, records) = tap_pose_optimizations(|| mcor.track(input));
-                    if !result.state.is_tracked() {
+                    let Some(record) = mcor_truth.track(&mut mcor, frame, input, &origin) else {
                         continue;
-                    }
-                    let (Some(record), Some(last)) = (
-                        records
-                            .iter()
-                            .rev()
-                            .find(|r| r.frame_id == frame.index as u64),
-                        mcor.last_frame(),
-                    ) else {
+                    };
+                    let Some(last) = mcor.last_frame() else {
                         continue;
                     };
                     let mut features = Vec::with_capacity(record.matches.len());
@@ -195,6 +264,7 @@ pub fn collect(
         ate: (ate_of(&baseline, &gt), ate_of(&mcor, &gt)),
         fig7,
         truth,
+        runs: (base_truth, mcor_truth),
     }
 }
 
@@ -225,6 +295,15 @@ pub struct FrameRow {
     pub mcor_rejected_clusters: usize,
     /// MC-OR: matches rejected by the FL (feature) test.
     pub mcor_rejected_features: usize,
+    /// Baseline: distance of the estimated camera centre from the true one, metres (empty
+    /// when not tracked).
+    pub orb_position_error: Option<f64>,
+    /// MC-OR: the same.
+    pub mcor_position_error: Option<f64>,
+    /// Baseline: inliers on moving objects.
+    pub orb_inliers_on_moving: usize,
+    /// MC-OR: inliers on moving objects.
+    pub mcor_inliers_on_moving: usize,
 }
 
 /// The per-frame rows (frames present in both runs).
@@ -246,6 +325,10 @@ pub fn rows(data: &OutlierData) -> Vec<FrameRow> {
             mcor_outliers: m.n_outliers,
             mcor_rejected_clusters: m.n_mcor_rejected_clusters,
             mcor_rejected_features: m.n_mcor_rejected_features,
+            orb_position_error: data.runs.0.position_errors.get(i).copied().flatten(),
+            mcor_position_error: data.runs.1.position_errors.get(i).copied().flatten(),
+            orb_inliers_on_moving: data.runs.0.moving_inliers.get(i).copied().unwrap_or(0),
+            mcor_inliers_on_moving: data.runs.1.moving_inliers.get(i).copied().unwrap_or(0),
         })
         .collect()
 }

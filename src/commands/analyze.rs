@@ -11,7 +11,7 @@
 use crate::analysis::correlation::{self as corr, markdown_table, Observation};
 use crate::analysis::figures::{
     per_frame_panels, rejected_features_image, Curve, Panel, BASELINE_COLOR, MCOR_COLOR,
-    REJECTED_COLOR,
+    MOVING_COLOR, REJECTED_COLOR,
 };
 use crate::analysis::outliers::{self, error_summary, mean_tracked, OutlierData};
 use crate::config_file::{apply_switches, base_config, Switches};
@@ -356,10 +356,47 @@ fn fig8(stem: &Path, preset: &str, data: &OutlierData) -> Result<()> {
             },
         ],
     };
+    let mut inliers = inliers;
+    if data.runs.0.moving_inliers.iter().any(|n| *n > 0) {
+        inliers.curves.push(Curve {
+            label: "ORB-SLAM2: inliers on moving objects".into(),
+            color: MOVING_COLOR,
+            values: data
+                .runs
+                .0
+                .moving_inliers
+                .iter()
+                .map(|n| *n as f64)
+                .collect(),
+            thin: true,
+        });
+    }
+    let centimetres = |e: &[Option<f64>]| {
+        e.iter()
+            .map(|x| x.map_or(f64::NAN, |m| m * 100.0))
+            .collect()
+    };
+    let position = Panel {
+        y_desc: "position error (cm)".into(),
+        curves: vec![
+            Curve {
+                label: "ORB-SLAM2".into(),
+                color: BASELINE_COLOR,
+                values: centimetres(&data.runs.0.position_errors),
+                thin: false,
+            },
+            Curve {
+                label: "w/ MC-OR".into(),
+                color: MCOR_COLOR,
+                values: centimetres(&data.runs.1.position_errors),
+                thin: false,
+            },
+        ],
+    };
     per_frame_panels(
         stem,
-        &format!("Inliers and outliers per frame, synthetic '{preset}'"),
-        &[inliers, outliers],
+        &format!("Inliers, outliers and position error per frame, synthetic '{preset}'"),
+        &[inliers, outliers, position],
     )
 }
 
@@ -401,6 +438,7 @@ fn outliers_markdown(seq: &SequenceArgs, data: &OutlierData, fig7_note: &str) ->
             ate(a)
         );
     }
+    association_markdown(&mut s, data);
     let t = &data.truth;
     let th = 0.05;
     s.push_str(
@@ -443,4 +481,40 @@ fn outliers_markdown(seq: &SequenceArgs, data: &OutlierData, fig7_note: &str) ->
     }
     let _ = writeln!(s, "\n{fig7_note}");
     s
+}
+
+/// The section on what the matches were (ground truth) and where the cameras were.
+fn association_markdown(s: &mut String, data: &OutlierData) {
+    use crate::analysis::association::Association::{Correct, Moving, Unknown, Wrong};
+    s.push_str(
+        "\n## What the matches were (ground truth)\n\nEvery match of every tracked frame's final \
+         pose optimization, checked against the synthetic truth: *correct* when the map point's \
+         reference observation (earliest keyframe still observing it) is the same surface point as \
+         the matched keypoint (within 3 px x octave scale in the image and 3 cm + 3 % of depth in \
+         3-D), *mismatch* otherwise, *moving* when either lies on a moving object, *unknown* \
+         without true depth. Position error: distance of the estimated camera centre from the \
+         true one (the system's world is its first camera), over tracked frames.\n\n\
+         | run | inliers: correct / mismatch / moving / unknown | outliers: correct / mismatch / moving / unknown | position error mean / max (m) |\n|---|---|---|---|\n",
+    );
+    for (name, run) in [("ORB-SLAM2", &data.runs.0), ("w/ MC-OR", &data.runs.1)] {
+        let c = &run.associations;
+        let split = |inlier: bool| {
+            let total = c.total(inlier).max(1) as f64;
+            [Correct, Wrong, Moving, Unknown]
+                .iter()
+                .map(|a| format!("{:.1} %", 100.0 * c.get(inlier, *a) as f64 / total))
+                .collect::<Vec<_>>()
+                .join(" / ")
+                + &format!(" (of {})", c.total(inlier))
+        };
+        let errors: Vec<f64> = run.position_errors.iter().flatten().copied().collect();
+        let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
+        let max = errors.iter().copied().fold(0.0, f64::max);
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} | {mean:.3} / {max:.3} |",
+            split(true),
+            split(false)
+        );
+    }
 }
