@@ -1,29 +1,9 @@
 //! End-to-end tests of `noisefree analyze`: both analyses on a short synthetic sequence write
 //! their files, and the Table II correlations are finite and within [-1, 1].
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn noisefree(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_noisefree"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("nf-analyze-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
-fn ok(out: &Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
+use common::{assert_ok, noisefree, tmpdir};
 
 #[test]
 fn correlation_writes_table_two_with_valid_coefficients() {
@@ -39,7 +19,7 @@ fn correlation_writes_table_two_with_valid_coefficients() {
         "--out",
         d.to_str().unwrap(),
     ]);
-    ok(&out);
+    assert_ok(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("| e_BASE,z |"), "{stdout}");
     let md = std::fs::read_to_string(d.join("table2_kinect.md")).unwrap();
@@ -81,7 +61,7 @@ fn outliers_writes_counts_and_figures() {
         "--out",
         d.to_str().unwrap(),
     ]);
-    ok(&out);
+    assert_ok(&out);
     let csv = std::fs::read_to_string(d.join("outliers_walking.csv")).unwrap();
     let mut lines = csv.lines();
     let header = lines.next().unwrap();

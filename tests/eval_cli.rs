@@ -1,14 +1,10 @@
 //! End-to-end tests of `noisefree eval`: the real binary on real files, good and bad.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn noisefree(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_noisefree"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
+use common::noisefree;
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 fn fixture(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,21 +1,9 @@
 //! End-to-end tests of `noisefree run`: the embedded synthetic default, its outputs, bit-exact
 //! reproducibility from a seed, and clean errors on bad input.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn noisefree(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_noisefree"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("nf-run-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{noisefree, tmpdir};
 
 #[test]
 fn default_run_writes_outputs_and_is_reproducible() {

@@ -2,27 +2,10 @@
 //! the CSV rows, resumption after an interruption (no duplicates, same table), shard merging
 //! (N shards = one unsharded sweep) and the Markdown table.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn noisefree(args: &[&str]) -> std::process::Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_noisefree"))
-        .args(args)
-        .output()
-        .expect("binary runs");
-    assert!(
-        out.status.success(),
-        "noisefree {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("nf-sweep-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{noisefree_ok, tmpdir};
+use std::path::Path;
 
 const FRAMES: &str = "40";
 
@@ -45,7 +28,7 @@ fn sweep(out: &Path, extra: &[&str]) {
     let o = out.to_str().unwrap();
     args.push(o);
     args.extend_from_slice(extra);
-    noisefree(&args);
+    noisefree_ok(&args);
 }
 
 /// Rows without the timing columns (fps, wall_s), sorted: what must not depend on the machine.
@@ -116,7 +99,7 @@ fn sweep_resume_shards_and_table() {
 
     // Tables: identical Table III from all three folders, in Markdown with both configurations.
     for d in [&full, &resumed, &sharded] {
-        noisefree(&["table", d.to_str().unwrap()]);
+        noisefree_ok(&["table", d.to_str().unwrap()]);
     }
     let t_full = std::fs::read_to_string(full.join("table3.md")).unwrap();
     assert_eq!(
@@ -144,7 +127,7 @@ fn sweep_resume_shards_and_table() {
 fn vary_sequence_gives_each_run_its_own_realization() {
     let d = tmpdir("vary");
     let o = d.to_str().unwrap();
-    noisefree(&[
+    noisefree_ok(&[
         "sweep",
         "--seq",
         "kinect",

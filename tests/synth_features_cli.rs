@@ -3,33 +3,15 @@
 //! `noisefree eval` scores the written trajectory against the folder's ground truth — the same
 //! files and formats a user would hand to outside tools.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn noisefree(args: &[&str]) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_noisefree"))
-        .args(args)
-        .output()
-        .expect("binary runs");
-    assert!(
-        out.status.success(),
-        "noisefree {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("nf-e2e-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{noisefree_ok, tmpdir};
 
 #[test]
 fn synth_features_run_eval_round_trip() {
     let seq = tmpdir("seq");
     let s = seq.to_str().unwrap();
-    noisefree(&[
+    noisefree_ok(&[
         "synth", "--preset", "kinect", "--frames", "40", "--seed", "3", "--out", s,
     ]);
     for f in [
@@ -49,7 +31,7 @@ fn synth_features_run_eval_round_trip() {
         .split_whitespace()
         .collect();
     let png = tmpdir("features").with_extension("png");
-    let out = noisefree(&[
+    let out = noisefree_ok(&[
         "features",
         seq.join(first[1]).to_str().unwrap(),
         "--depth",
@@ -64,7 +46,7 @@ fn synth_features_run_eval_round_trip() {
     assert!(text.contains("1000"), "1000 keypoints expected: {text}");
 
     let run_dir = tmpdir("run");
-    let out = noisefree(&[
+    let out = noisefree_ok(&[
         "run",
         "--path",
         s,
@@ -73,7 +55,7 @@ fn synth_features_run_eval_round_trip() {
         run_dir.to_str().unwrap(),
     ]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("tracked 40/40 frames"));
-    let out = noisefree(&[
+    let out = noisefree_ok(&[
         "eval",
         seq.join("groundtruth.txt").to_str().unwrap(),
         run_dir.join("trajectory.txt").to_str().unwrap(),
