@@ -7,8 +7,8 @@ use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::RotationHistogram;
 use crate::camera::Camera;
-use crate::data::{KeyFrameId, Map, MapPoint, MapPointId, ScaleLevels, TrackedFrame};
-use crate::feature::{hamming, TH_HIGH};
+use crate::data::{Features, KeyFrameId, Map, MapPoint, MapPointId, ScaleLevels, TrackedFrame};
+use crate::feature::{hamming, Descriptor, TH_HIGH};
 
 /// A map point predicted to be visible in a frame (ORB-SLAM2's `mbTrackInView` data).
 #[derive(Clone, Copy, Debug)]
@@ -91,10 +91,8 @@ pub fn search_local_points(
         let (mut best_level, mut best_level2) = (-1i64, -1i64);
         let mut best_idx = usize::MAX;
         for idx in candidates {
-            if let Some(existing) = frame.map_points[idx] {
-                if map.map_point(existing).is_some_and(|m| m.n_obs > 0) {
-                    continue;
-                }
+            if matched_to_observed(frame, idx, map) {
+                continue;
             }
             if let Some(ur) = features.u_right_of(idx) {
                 if (vp.u_right - ur).abs() > r * levels.scale(vp.level) {
@@ -178,25 +176,13 @@ pub fn search_by_projection_last_frame(
             features.features_in_area(uv.x, uv.y, radius, last_octave - 1, last_octave + 1)
         };
         let ur_proj = uv.x - camera.bf / pc.z;
-        let (mut best, mut best_idx) = (u32::MAX, usize::MAX);
-        for idx in candidates {
-            if let Some(existing) = current.map_points[idx] {
-                if map.map_point(existing).is_some_and(|m| m.n_obs > 0) {
-                    continue;
-                }
-            }
-            if let Some(ur) = features.u_right_of(idx) {
-                if (ur_proj - ur).abs() > radius {
-                    continue;
-                }
-            }
-            let d = hamming(&mp.descriptor, &features.descriptors[idx]);
-            if d < best {
-                best = d;
-                best_idx = idx;
-            }
-        }
-        if best <= TH_HIGH {
+        let best = closest_descriptor(&features, candidates, &mp.descriptor, |idx| {
+            matched_to_observed(current, idx, map)
+                || features
+                    .u_right_of(idx)
+                    .is_some_and(|ur| (ur_proj - ur).abs() > radius)
+        });
+        if let Some((_, best_idx)) = best.filter(|(d, _)| *d <= TH_HIGH) {
             current.map_points[best_idx] = Some(id);
             current.outliers[best_idx] = false;
             n += 1;
@@ -207,11 +193,7 @@ pub fn search_by_projection_last_frame(
             );
         }
     }
-    for idx in hist.rejected() {
-        current.map_points[idx] = None;
-        n -= 1;
-    }
-    n
+    n - unmatch_rotation_outliers(current, &hist)
 }
 
 /// Relocalization search (ORB-SLAM2's SearchByProjection(CurrentFrame, KF, AlreadyFound, th,
@@ -261,18 +243,10 @@ pub fn search_by_projection_keyframe(
         let level = mp.predict_scale(dist, levels) as i32;
         let radius = th * levels.scale(level as usize);
         let candidates = features.features_in_area(uv.x, uv.y, radius, level - 1, level + 1);
-        let (mut best, mut best_idx) = (u32::MAX, usize::MAX);
-        for idx in candidates {
-            if current.map_points[idx].is_some() {
-                continue;
-            }
-            let d = hamming(&mp.descriptor, &features.descriptors[idx]);
-            if d < best {
-                best = d;
-                best_idx = idx;
-            }
-        }
-        if best <= orb_dist {
+        let best = closest_descriptor(&features, candidates, &mp.descriptor, |idx| {
+            current.map_points[idx].is_some()
+        });
+        if let Some((_, best_idx)) = best.filter(|(d, _)| *d <= orb_dist) {
             current.map_points[best_idx] = Some(id);
             current.outliers[best_idx] = false;
             n += 1;
@@ -283,9 +257,45 @@ pub fn search_by_projection_keyframe(
             );
         }
     }
-    for idx in hist.rejected() {
-        current.map_points[idx] = None;
-        n -= 1;
+    n - unmatch_rotation_outliers(current, &hist)
+}
+
+/// Whether keypoint `idx` of `frame` is already matched to a map point some keyframe observes
+/// (such matches are kept; a search only fills free or tentative slots).
+fn matched_to_observed(frame: &TrackedFrame, idx: usize, map: &Map) -> bool {
+    frame.map_points[idx]
+        .and_then(|id| map.map_point(id))
+        .is_some_and(|m| m.n_obs > 0)
+}
+
+/// The candidate keypoint whose descriptor is closest (Hamming) to `descriptor`, with its
+/// distance, skipping the candidates `skip` rules out; `None` when none is left. Ties keep the
+/// first candidate.
+fn closest_descriptor(
+    features: &Features,
+    candidates: impl IntoIterator<Item = usize>,
+    descriptor: &Descriptor,
+    mut skip: impl FnMut(usize) -> bool,
+) -> Option<(u32, usize)> {
+    let mut best: Option<(u32, usize)> = None;
+    for idx in candidates {
+        if skip(idx) {
+            continue;
+        }
+        let d = hamming(descriptor, &features.descriptors[idx]);
+        if best.is_none_or(|(b, _)| d < b) {
+            best = Some((d, idx));
+        }
     }
-    n
+    best
+}
+
+/// Undoes the matches whose rotation is inconsistent with the dominant ones (ORB-SLAM2's
+/// rotation-consistency check); returns how many.
+fn unmatch_rotation_outliers(frame: &mut TrackedFrame, hist: &RotationHistogram) -> usize {
+    let rejected = hist.rejected();
+    for &idx in &rejected {
+        frame.map_points[idx] = None;
+    }
+    rejected.len()
 }
