@@ -69,8 +69,8 @@ macro_rules! both {
 }
 
 /// The legend box every figure uses: upper left, translucent white, 18 px labels.
-fn draw_legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+fn draw_legend<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64>>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
 ) -> Result<()> {
     chart
         .configure_series_labels()
@@ -158,7 +158,9 @@ pub fn trajectories(
     })
 }
 
-/// Fig. 9: ATE of every run (dots) and the mean (bar) per sequence and configuration.
+/// Fig. 9: ATE of every run (dots) and the mean (bar) per sequence and configuration, on a
+/// logarithmic axis (synthetic presets span millimetres to decimetres; a linear axis flattens
+/// the easy ones to zero). Configurations in the paper's column order.
 /// `groups`: (sequence, configuration, ATEs of its runs).
 pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)]) -> Result<()> {
     let mut seqs: Vec<String> = Vec::new();
@@ -171,20 +173,29 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
             cfgs.push(c.clone());
         }
     }
-    let ymax = groups
-        .iter()
-        .flat_map(|g| g.2.iter().copied())
-        .fold(0.0f64, f64::max)
-        .max(1e-4)
-        * 1.15;
+    let rank = |c: &str| {
+        ["orb", "mcor", "avc", "mcor+avc"]
+            .iter()
+            .position(|k| *k == c)
+            .unwrap_or(usize::MAX)
+    };
+    cfgs.sort_by(|a, b| rank(a).cmp(&rank(b)).then(a.cmp(b)));
+    let positive = || {
+        groups
+            .iter()
+            .flat_map(|g| g.2.iter().copied())
+            .filter(|a| *a > 0.0 && a.is_finite())
+    };
+    let ymax = positive().fold(1e-4f64, f64::max) * 1.5;
+    let ymin = positive().fold(ymax, f64::min).min(ymax / 10.0) / 1.5;
     let ncfg = cfgs.len().max(1) as f64;
     both!(stem, |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 26))
             .margin(20)
             .x_label_area_size(60)
-            .y_label_area_size(70)
-            .build_cartesian_2d(-0.5f64..(seqs.len() as f64 - 0.5), 0.0..ymax)
+            .y_label_area_size(80)
+            .build_cartesian_2d(-0.5f64..(seqs.len() as f64 - 0.5), (ymin..ymax).log_scale())
             .map_err(err)?;
         let seq_names = seqs.clone();
         chart
@@ -199,7 +210,8 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
                     String::new()
                 }
             })
-            .y_desc("ATE RMSE [m]")
+            .y_desc("ATE RMSE [m], log scale")
+            .y_label_formatter(&|y| metres_label(*y))
             .label_style(("sans-serif", 16))
             .draw()
             .map_err(err)?;
@@ -213,7 +225,7 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
                     continue;
                 }
                 let x = seqs.iter().position(|q| q == s).unwrap_or(0) as f64 + offset;
-                dots.extend(ates.iter().map(|&a| (x, a)));
+                dots.extend(ates.iter().filter(|a| **a > 0.0).map(|&a| (x, a)));
                 let mean = ates.iter().sum::<f64>() / ates.len() as f64;
                 bars.push(((x - 0.3 / ncfg, mean), (x + 0.3 / ncfg, mean)));
             }
@@ -231,6 +243,13 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
         }
         draw_legend(&mut chart)
     })
+}
+
+/// A tick label for metres on a log axis: as many decimals as the value needs (0.001, 0.02,
+/// 0.3, 2).
+fn metres_label(y: f64) -> String {
+    let decimals = (-y.log10().floor()).clamp(0.0, 6.0) as usize;
+    format!("{y:.decimals$}")
 }
 
 /// Fig. 8: a per-frame quantity (e.g. outlier ratio) over frames, one curve per configuration.
