@@ -1,6 +1,6 @@
 //! Building a run's `slam_core::system::Config`: the defaults for the sensor (ORB-SLAM2's TUM
 //! or EuRoC settings), overlaid with a TOML file where every field is optional, then the
-//! command line's switches (`--mcor`, `--avc`, `--seed`).
+//! command line's switches (`--mcor`, `--avc`, `--mapping-lag`, `--seed`).
 
 use anyhow::{Context, Result};
 use slam_core::system::{AvcParams, Config, McorParams};
@@ -51,6 +51,8 @@ pub struct Switches {
     pub mcor: bool,
     /// Turn AVC on with its default baseline (unless the file configured it).
     pub avc: bool,
+    /// Emulated local-mapping lag in frames (`Config::mapping_lag`), overriding the file's.
+    pub mapping_lag: Option<u32>,
 }
 
 /// Applies the switches.
@@ -60,6 +62,9 @@ pub fn apply_switches(mut config: Config, s: Switches) -> Config {
     }
     if s.avc && config.avc.is_none() {
         config.avc = Some(AvcParams::default());
+    }
+    if let Some(n) = s.mapping_lag {
+        config.mapping_lag = n;
     }
     config
 }

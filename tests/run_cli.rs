@@ -120,3 +120,30 @@ fn bad_config_file_is_a_clean_error() {
     let e = String::from_utf8_lossy(&out.stderr);
     assert!(e.contains("bad.toml") && !e.contains("panicked"), "{e}");
 }
+
+#[test]
+fn mapping_lag_makes_seeded_runs_differ() {
+    let d = tmpdir("lag");
+    let out = noisefree(&[
+        "run",
+        "--frames",
+        "60",
+        "--runs",
+        "2",
+        "--mapping-lag",
+        "3",
+        "--quiet",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |seed: &str| std::fs::read_to_string(d.join(seed).join("trajectory.txt")).unwrap();
+    let (a, b) = (read("seed0"), read("seed1"));
+    assert_eq!(a.lines().filter(|l| !l.starts_with('#')).count(), 60);
+    assert_ne!(a, b);
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -126,6 +126,7 @@ fn run_correlation(args: CorrelationArgs) -> Result<()> {
         Switches {
             mcor: args.mcor,
             avc: args.avc,
+            mapping_lag: None,
         },
     );
     let data = corr::collect(

@@ -26,6 +26,12 @@ pub struct RunArgs {
     /// TOML configuration overlaid on the sensor's defaults (any subset of the fields).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// Emulate ORB-SLAM2's concurrent local mapping: each keyframe is mapped up to N frames
+    /// late (seeded), so runs with different --seed spread as ORB-SLAM2's do [default: 0,
+    /// synchronous as in the paper's protocol: runs of one sequence differ only where
+    /// relocalization's RANSAC draws].
+    #[arg(long = "mapping-lag", value_name = "N")]
+    pub mapping_lag: Option<u32>,
     /// Seed of the first run; run k uses seed + k.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -121,6 +127,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         Switches {
             mcor: args.mcor,
             avc: args.avc,
+            mapping_lag: args.mapping_lag,
         },
     );
     let cname = config_name(&config);

@@ -69,6 +69,12 @@ pub struct SweepArgs {
     /// TOML configuration overlaid on the defaults of every run.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// Emulate ORB-SLAM2's concurrent local mapping: each keyframe is mapped up to N frames
+    /// late (seeded), so runs with different --seed spread as ORB-SLAM2's do [default: 0,
+    /// synchronous as in the paper's protocol: runs of one sequence differ only where
+    /// relocalization's RANSAC draws].
+    #[arg(long = "mapping-lag", value_name = "N")]
+    pub mapping_lag: Option<u32>,
     /// Synthetic sequences: number of frames (default 300); real ones: only the first N frames.
     #[arg(long, value_name = "N")]
     pub frames: Option<usize>,
@@ -295,6 +301,9 @@ pub fn run(args: SweepArgs) -> Result<()> {
             let mut base = base_config(seq.camera.sensor);
             if let Some(p) = &args.config {
                 base = overlay_file(&base, p)?;
+            }
+            if let Some(n) = args.mapping_lag {
+                base.mapping_lag = n;
             }
             let bar = multi.add(ProgressBar::new(jobs.len() as u64));
             bar.set_style(

@@ -3,18 +3,21 @@
 //! (the paper synchronises ORB-SLAM2's threads the same way). Every random choice draws from
 //! one ChaCha RNG seeded by `Config::seed`, and every container iterates in id order, so the
 //! same frames, configuration and seed give a bit-identical trajectory. In this synchronous mode
-//! the seed only reaches the relocalization RANSAC.
+//! the seed only reaches the relocalization RANSAC. `Config::mapping_lag` emulates ORB-SLAM2's
+//! concurrent local mapping instead: each keyframe's mapping completes a seeded number of frames
+//! later, which gives seeded runs the spread of ORB-SLAM2's threads while staying reproducible.
 
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Isometry3;
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
-use crate::data::{Features, KeyFrameId, Map, ScaleLevels, TrackedFrame};
+use crate::data::{Features, KeyFrameId, Map, MapPointId, ScaleLevels, TrackedFrame};
 use crate::feature::{OrbConfig, OrbExtractor};
 use crate::frame::Frame;
 use crate::image::FrameInput;
@@ -80,6 +83,13 @@ pub struct Config {
     pub mcor: Option<McorParams>,
     /// AVC (paper III-B) when set.
     pub avc: Option<AvcParams>,
+    /// Emulated local-mapping latency, frames (0 = synchronous, the paper's protocol). With
+    /// N > 0 each new keyframe is mapped (triangulation, fusion, culling, local BA) only after
+    /// a number of frames drawn uniformly from 0..=N with the run's RNG, in keyframe order;
+    /// meanwhile tracking goes on with the map as it is, and the keyframe decision sees a busy
+    /// mapper (no c1b, at most 3 keyframes waiting), as with ORB-SLAM2's threads. Gives
+    /// seeded runs of one sequence ORB-SLAM2's run-to-run spread, reproducibly.
+    pub mapping_lag: u32,
 }
 
 impl Default for Config {
@@ -95,6 +105,7 @@ impl Default for Config {
             init_min_depths: 50,
             mcor: None,
             avc: None,
+            mapping_lag: 0,
         }
     }
 }
@@ -208,6 +219,16 @@ pub struct System {
     last_keyframe_frame: u64,
     records: Vec<FrameRecord>,
     stats: Vec<FrameStats>,
+    pending: VecDeque<PendingKeyFrame>,
+}
+
+/// A keyframe waiting for local mapping (emulated mapping lag).
+#[derive(Clone, Debug)]
+struct PendingKeyFrame {
+    kf: KeyFrameId,
+    created: Vec<MapPointId>,
+    /// Frame counter after whose tracking its mapping has completed.
+    due: u64,
 }
 
 impl System {
@@ -232,6 +253,7 @@ impl System {
             last_keyframe_frame: 0,
             records: Vec::new(),
             stats: Vec::new(),
+            pending: VecDeque::new(),
         }
     }
 
@@ -342,7 +364,10 @@ impl System {
                 stats.n_tracked_map_points = stats.n_matches;
             }
         } else {
-            self.track_frame(&mut cur, &mut stats, &mut mapping);
+            self.track_frame(&mut cur, &mut stats);
+            // Local mapping of the keyframes due by now (this frame's, when synchronous), before
+            // the frame's pose is stored relative to its reference keyframe's refined pose.
+            mapping = self.map_due_keyframes(cur.id);
         }
         self.record(&cur);
         let tcw = if self.state.is_tracked() {
@@ -416,12 +441,7 @@ impl System {
     }
 
     /// Tracking of an initialised system (ORB-SLAM2's Track after initialisation).
-    fn track_frame(
-        &mut self,
-        cur: &mut TrackedFrame,
-        stats: &mut FrameStats,
-        mapping: &mut MappingReport,
-    ) {
+    fn track_frame(&mut self, cur: &mut TrackedFrame, stats: &mut FrameStats) {
         let max_frames = self
             .config
             .keyframes
@@ -517,6 +537,7 @@ impl System {
             last_reloc_frame: self.tracker.last_reloc_frame,
             matches_inliers: self.tracker.matches_inliers,
             reference_kf: self.tracker.reference_kf.unwrap_or(KeyFrameId(0)),
+            keyframes_in_queue: self.pending.len(),
         };
         if need_new_keyframe(
             cur,
@@ -532,22 +553,54 @@ impl System {
                 cur.reference_kf = Some(kf);
                 self.last_keyframe_frame = cur.id;
                 stats.keyframe_inserted = true;
-                let mctx = MappingContext {
-                    camera: &self.camera,
-                    levels: &self.levels,
-                    params: &self.config.mapping,
-                    ba: &self.ba_cfg,
-                    hooks,
+                let lag = match self.config.mapping_lag {
+                    0 => 0,
+                    n => self.rng.random_range(0..=u64::from(n)),
                 };
-                *mapping = self.mapper.process(kf, created, &mut self.map, &mctx);
+                let after_queue = self.pending.back().map_or(0, |p| p.due);
+                self.pending.push_back(PendingKeyFrame {
+                    kf,
+                    created,
+                    due: (cur.id + lag).max(after_queue),
+                });
             }
         }
+
         for i in 0..cur.len() {
             if cur.outliers[i] {
                 cur.map_points[i] = None;
                 cur.outliers[i] = false;
             }
         }
+    }
+
+    /// Runs local mapping for the waiting keyframes whose mapping has completed by the end of
+    /// frame `frame_id` (all of them in the synchronous run), in keyframe order; returns the
+    /// summed report.
+    fn map_due_keyframes(&mut self, frame_id: u64) -> MappingReport {
+        let mut total = MappingReport::default();
+        while self.pending.front().is_some_and(|p| p.due <= frame_id) {
+            let Some(p) = self.pending.pop_front() else {
+                break;
+            };
+            if self.map.keyframe(p.kf).is_none() {
+                continue;
+            }
+            let ctx = MappingContext {
+                camera: &self.camera,
+                levels: &self.levels,
+                params: &self.config.mapping,
+                ba: &self.ba_cfg,
+                hooks: NoiseHooks {
+                    mcor: self.config.mcor.as_ref(),
+                    avc: self.config.avc.as_ref(),
+                },
+            };
+            let r = self.mapper.process(p.kf, p.created, &mut self.map, &ctx);
+            total.time_mapping_ms += r.time_mapping_ms;
+            total.time_ba_ms += r.time_ba_ms;
+        }
+        total
     }
 
     /// Stores the frame's pose relative to its reference keyframe (or repeats the last relative

@@ -27,9 +27,11 @@ pub struct KeyFrameParams {
     pub ref_ratio_weak: f64,
     /// Inliers a new keyframe must have (more than 15).
     pub min_inliers: usize,
-    /// ORB-SLAM2's condition c1b "local mapping is idle": always true in our synchronous run
-    /// (as in the paper's synchronised ORB-SLAM2), so keyframes are inserted whenever c2 holds.
-    /// `false` drops c1b and keeps only c1a / c1c, which inserts fewer keyframes.
+    /// Whether ORB-SLAM2's condition c1b ("local mapping is idle") may hold: local mapping is
+    /// always idle in the synchronous run (as in the paper's synchronised ORB-SLAM2), so
+    /// keyframes are inserted whenever c2 holds; with an emulated mapping lag
+    /// (`Config::mapping_lag`) it holds only while no keyframe waits. `false` drops c1b and
+    /// keeps only c1a / c1c, which inserts fewer keyframes.
     pub mapping_idle: bool,
 }
 
@@ -62,11 +64,14 @@ pub struct KeyFrameDecisionInput {
     pub matches_inliers: usize,
     /// Reference keyframe.
     pub reference_kf: KeyFrameId,
+    /// Keyframes waiting for local mapping (always 0 in the synchronous run).
+    pub keyframes_in_queue: usize,
 }
 
 /// ORB-SLAM2's rule: c1 = (c1a: max frames passed) || (c1b: min frames passed and mapping idle)
 /// || (c1c: inliers < 0.25 ref matches or close points needed); c2 = (inliers < ratio * ref
-/// matches or close points needed) && inliers > 15; insert when c1 && c2.
+/// matches or close points needed) && inliers > 15; insert when c1 && c2, and, while local
+/// mapping is busy, only if fewer than 3 keyframes wait for it (RGB-D / stereo).
 pub fn need_new_keyframe(
     frame: &TrackedFrame,
     input: &KeyFrameDecisionInput,
@@ -111,9 +116,14 @@ pub fn need_new_keyframe(
     let inliers = input.matches_inliers as f64;
     let since = input.frame_id.saturating_sub(input.last_keyframe_frame);
     let c1a = since >= max_frames;
-    let c1b = params.mapping_idle && since >= params.min_frames;
+    let idle = input.keyframes_in_queue == 0;
+    let c1b = params.mapping_idle && idle && since >= params.min_frames;
     let c1c = inliers < ref_matches * params.ref_ratio_weak || need_close;
     let c2 =
         (inliers < ref_matches * ratio || need_close) && input.matches_inliers > params.min_inliers;
-    (c1a || c1b || c1c) && c2
+    (c1a || c1b || c1c) && c2 && (idle || input.keyframes_in_queue < MAX_KEYFRAMES_IN_QUEUE)
 }
+
+/// Keyframes that may wait for a busy local mapping before tracking stops inserting more
+/// (ORB-SLAM2's RGB-D / stereo rule).
+pub const MAX_KEYFRAMES_IN_QUEUE: usize = 3;
