@@ -2,6 +2,7 @@
 //! determinism, texture richness (FAST corners), moving-object coverage, occlusion, stereo.
 
 use nalgebra::Point3;
+use slam_core::feature::fast::CIRCLE;
 use synth::{
     AxialNoise, DepthLag, DepthNoise, Generator, LateralNoise, MovingObjects, SynthConfig,
     SystematicDistortion,
@@ -168,34 +169,19 @@ fn frames_are_deterministic_across_order_and_threads() {
     assert_ne!(f5.depth, other.depth);
 }
 
-/// Minimal FAST-9 (16-pixel circle of radius 3, 9 contiguous brighter or darker by `t`).
+/// Minimal FAST-9 without suppression (slam-core's 16-pixel circle of radius 3, 9 contiguous
+/// brighter or darker by `t`): every corner pixel, to measure texture richness.
 fn fast9(img: &[u8], w: usize, h: usize, t: i16) -> Vec<(usize, usize)> {
-    const C: [(i64, i64); 16] = [
-        (0, -3),
-        (1, -3),
-        (2, -2),
-        (3, -1),
-        (3, 0),
-        (3, 1),
-        (2, 2),
-        (1, 3),
-        (0, 3),
-        (-1, 3),
-        (-2, 2),
-        (-3, 1),
-        (-3, 0),
-        (-3, -1),
-        (-2, -2),
-        (-1, -3),
-    ];
     let mut out = Vec::new();
     for y in 3..h.saturating_sub(3) {
         for x in 3..w.saturating_sub(3) {
             let p = img[y * w + x] as i16;
-            let s: Vec<i8> = C
+            let s: Vec<i8> = CIRCLE
                 .iter()
                 .map(|&(dx, dy)| {
-                    let q = img[(y as i64 + dy) as usize * w + (x as i64 + dx) as usize] as i16;
+                    let q = img
+                        [(y as i64 + dy as i64) as usize * w + (x as i64 + dx as i64) as usize]
+                        as i16;
                     if q > p + t {
                         1
                     } else if q < p - t {

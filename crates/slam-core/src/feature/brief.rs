@@ -14,6 +14,27 @@ pub const GAUSS7: [u32; 7] = [18, 33, 49, 56, 49, 33, 18];
 /// Separable 7x7 Gaussian blur (sigma 2) of `src` into `dst`, replicating the border pixels.
 /// `tmp` holds the horizontal pass and is reused between calls.
 pub fn gaussian_blur(src: &GrayImage, dst: &mut GrayImage, tmp: &mut Vec<u16>) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: `gaussian_blur_avx2` only enables AVX2 code generation for safe code; the
+        // CPU supports AVX2, checked on the line above.
+        unsafe { gaussian_blur_avx2(src, dst, tmp) };
+        return;
+    }
+    gaussian_blur_impl(src, dst, tmp);
+}
+
+/// [`gaussian_blur_impl`] compiled with AVX2 enabled (integer arithmetic: bit-identical to the
+/// baseline build). Call only on a CPU that has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn gaussian_blur_avx2(src: &GrayImage, dst: &mut GrayImage, tmp: &mut Vec<u16>) {
+    gaussian_blur_impl(src, dst, tmp);
+}
+
+/// The body of [`gaussian_blur`].
+#[inline(always)]
+fn gaussian_blur_impl(src: &GrayImage, dst: &mut GrayImage, tmp: &mut Vec<u16>) {
     let (w, h) = (src.width, src.height);
     dst.width = w;
     dst.height = h;
@@ -94,41 +115,95 @@ const PATTERN_SOA: PatternSoa = {
     PatternSoa { x, y }
 };
 
+/// Row stride of the local copy of the descriptor window: a power of two above
+/// `2 * PATTERN_RADIUS + 1`, so a window index is `(v << 5) | u` and masking it with
+/// `WINDOW_LEN - 1` proves it in bounds without a check.
+const WINDOW_STRIDE: usize = 32;
+/// Size of the local window copy.
+const WINDOW_LEN: usize = WINDOW_STRIDE * WINDOW_STRIDE;
+const _: () = assert!(2 * (PATTERN_RADIUS as usize) < WINDOW_STRIDE);
+
+/// `floor(x)` as a float for `|x| < 2^22`, in arithmetic that vectorizes. Adding `1.5 * 2^23`
+/// rounds `x` to the nearest integer (ties to even); one compare turns that into the floor.
+#[inline(always)]
+fn floor_small(x: f32) -> f32 {
+    let nearest = (x + MAGIC) - MAGIC;
+    if nearest > x {
+        nearest - 1.0
+    } else {
+        nearest
+    }
+}
+
+/// `1.5 * 2^23`: its ulp is 1, so `x + MAGIC` holds the integer `x` in the low mantissa bits.
+const MAGIC: f32 = 12_582_912.0;
+
+/// The integer value of `x`, an integer-valued float with `|x| < 2^22` (a plain `as i32` cast
+/// saturates, which SSE2/AVX2 code can only do one lane at a time).
+#[inline(always)]
+fn small_float_to_int(x: f32) -> i32 {
+    (x + MAGIC).to_bits() as i32 - MAGIC.to_bits() as i32
+}
+
 /// The steered BRIEF descriptor of the keypoint at pixel (x, y) of the blurred level, with
 /// orientation `angle_deg` (degrees, image coordinates): each pattern point (px, py) is rotated
 /// to (px cos - py sin, px sin + py cos) and rounded to the nearest pixel. The caller keeps
 /// (x, y) at least `PATTERN_RADIUS + 2` px from the border.
 pub fn compute_descriptor(blurred: &GrayImage, x: usize, y: usize, angle_deg: f32) -> Descriptor {
-    const R: i32 = PATTERN_RADIUS;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: `descriptor_avx2` only enables AVX2 code generation for safe code; the CPU
+        // supports AVX2, checked on the line above.
+        return unsafe { descriptor_avx2(blurred, x, y, angle_deg) };
+    }
+    descriptor_impl(blurred, x, y, angle_deg)
+}
+
+/// [`descriptor_impl`] compiled with AVX2 enabled (8 pattern points per instruction instead of
+/// 4; the float operations are the same IEEE operations, so the result is bit-identical). Call
+/// only on a CPU that has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn descriptor_avx2(blurred: &GrayImage, x: usize, y: usize, angle_deg: f32) -> Descriptor {
+    descriptor_impl(blurred, x, y, angle_deg)
+}
+
+/// The body of [`compute_descriptor`]: the window around the keypoint is copied into a
+/// fixed-size array, the rotated pattern turned into window indices in float arithmetic (no
+/// branches, no saturating casts, no libm: all of it vectorizes), then the 256 tests read.
+#[inline(always)]
+fn descriptor_impl(blurred: &GrayImage, x: usize, y: usize, angle_deg: f32) -> Descriptor {
+    const R: usize = PATTERN_RADIUS as usize;
     let (s, c) = angle_deg.to_radians().sin_cos();
     let w = blurred.width;
     // The square window of radius R around the keypoint; slicing panics (instead of reading
     // elsewhere) if the caller breaks the border contract.
-    let r = R as usize;
-    let first = (y.wrapping_sub(r))
-        .wrapping_mul(w)
-        .wrapping_add(x.wrapping_sub(r));
-    let last = (y + r) * w + x + r;
-    let window = &blurred.data[first..=last];
-    let base = (R * w as i32 + R) as u32;
-    // Window offsets of the rotated points (vectorized: no branches, no libm). Every pattern
-    // point lies within radius R, so the rounded rotated point does too and the clamp never
-    // changes a value; it only lets the reads below skip their bounds checks.
-    let mut off = [0u32; 512];
-    let (px, py) = (&PATTERN_SOA.x, &PATTERN_SOA.y);
-    let wi = w as i32;
-    for k in 0..512 {
-        let u = ((px[k] * c - py[k] * s + 64.5) as i32 - 64).clamp(-R, R);
-        let v = ((px[k] * s + py[k] * c + 64.5) as i32 - 64).clamp(-R, R);
-        off[k] = (base as i32 + v * wi + u) as u32;
+    let mut window = [0u8; WINDOW_LEN];
+    for (dy, dst) in window
+        .chunks_exact_mut(WINDOW_STRIDE)
+        .take(2 * R + 1)
+        .enumerate()
+    {
+        let start = (y + dy).wrapping_sub(R).wrapping_mul(w) + x.wrapping_sub(R);
+        dst[..2 * R + 1].copy_from_slice(&blurred.data[start..start + 2 * R + 1]);
     }
-    // o = (R + v) * w + (R + u) with u, v clamped to [-R, R], so 0 <= o < window.len(); the
-    // bounds check stays (unchecked reads measured no faster).
-    let at = |o: u32| window[o as usize];
+    // Window index of every rotated point: the pixel is floor(p + 64.5) - 64 as in the plain
+    // `(p + 64.5) as i32 - 64`, clamped to the window (every pattern point lies within radius
+    // R, so the rounded rotated point does too and the clamp never changes a value; it only
+    // keeps the index provably inside the window). All values are small integers, exact in f32.
+    let mut idx = [0u32; 512];
+    let (px, py) = (&PATTERN_SOA.x, &PATTERN_SOA.y);
+    let (lo, hi) = (64.0 - R as f32, 64.0 + R as f32);
+    for k in 0..512 {
+        let u = floor_small(px[k] * c - py[k] * s + 64.5).clamp(lo, hi) - lo;
+        let v = floor_small(px[k] * s + py[k] * c + 64.5).clamp(lo, hi) - lo;
+        idx[k] = small_float_to_int(v * WINDOW_STRIDE as f32 + u) as u32;
+    }
+    let at = |i: u32| window[i as usize & (WINDOW_LEN - 1)];
     let mut desc = [0u64; 4];
-    for (word, offs) in desc.iter_mut().zip(off.chunks_exact(128)) {
+    for (word, pairs) in desc.iter_mut().zip(idx.chunks_exact(128)) {
         let mut bits = 0u64;
-        for (b, pair) in offs.chunks_exact(2).enumerate() {
+        for (b, pair) in pairs.chunks_exact(2).enumerate() {
             bits |= ((at(pair[0]) < at(pair[1])) as u64) << b;
         }
         *word = bits;
@@ -161,6 +236,104 @@ mod tests {
         assert_eq!(out.get(10, 6), out.get(10, 8));
         assert_eq!(out.get(10, 3), out.get(14, 7));
         assert_eq!(out.get(10, 2), 0);
+    }
+
+    #[test]
+    fn float_floor_and_conversion_are_exact() {
+        let mut x = -300.0f32;
+        while x < 300.0 {
+            for v in [x, x + 0.5, x - 0.5, x.next_up(), x.next_down()] {
+                assert_eq!(floor_small(v), v.floor(), "{v}");
+                assert_eq!(small_float_to_int(v.floor()), v.floor() as i32, "{v}");
+            }
+            x += 0.37;
+        }
+        for v in [
+            0.0,
+            -0.0,
+            0.5,
+            1.5,
+            2.5,
+            -0.5,
+            -1.5,
+            64.5,
+            63.999_996,
+            4_194_303.5,
+        ] {
+            assert_eq!(floor_small(v), v.floor(), "{v}");
+            assert_eq!(small_float_to_int(v.floor()), v.floor() as i32, "{v}");
+        }
+    }
+
+    #[test]
+    fn blur_equals_direct_convolution() {
+        let img = crate::feature::fast::tests::random_image(67, 41, 9);
+        let (w, h) = (67usize, 41usize);
+        let at = |x: i64, y: i64| {
+            img.get(
+                x.clamp(0, w as i64 - 1) as usize,
+                y.clamp(0, h as i64 - 1) as usize,
+            ) as u32
+        };
+        let (mut out, mut tmp) = (GrayImage::new(0, 0), Vec::new());
+        gaussian_blur(&img, &mut out, &mut tmp);
+        let (mut portable, mut tmp2) = (GrayImage::new(0, 0), Vec::new());
+        gaussian_blur_impl(&img, &mut portable, &mut tmp2);
+        assert_eq!(out, portable);
+        for y in 0..h as i64 {
+            for x in 0..w as i64 {
+                let mut v = 0u32;
+                for (j, &gy) in GAUSS7.iter().enumerate() {
+                    let row: u32 = GAUSS7
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &gx)| gx * at(x + i as i64 - 3, y + j as i64 - 3))
+                        .sum();
+                    v += gy * row;
+                }
+                assert_eq!(
+                    out.get(x as usize, y as usize) as u32,
+                    (v + (1 << 15)) >> 16
+                );
+            }
+        }
+    }
+
+    /// The descriptor as first written: integer casts and offsets into the whole level.
+    fn reference_descriptor(img: &GrayImage, x: usize, y: usize, angle_deg: f32) -> Descriptor {
+        let (s, c) = angle_deg.to_radians().sin_cos();
+        let mut desc = [0u64; 4];
+        for (i, p) in PATTERN.iter().enumerate() {
+            let pt = |px: i8, py: i8| {
+                let (px, py) = (px as f32, py as f32);
+                let u = (px * c - py * s + 64.5) as i32 - 64;
+                let v = (px * s + py * c + 64.5) as i32 - 64;
+                img.get((x as i32 + u) as usize, (y as i32 + v) as usize)
+            };
+            if pt(p[0], p[1]) < pt(p[2], p[3]) {
+                desc[i / 64] |= 1 << (i % 64);
+            }
+        }
+        desc
+    }
+
+    #[test]
+    fn descriptor_equals_reference_at_every_angle() {
+        let img = crate::feature::fast::tests::random_image(61, 61, 5);
+        let mut angle = 0.0f32;
+        while angle < 360.0 {
+            assert_eq!(
+                compute_descriptor(&img, 30, 30, angle),
+                reference_descriptor(&img, 30, 30, angle),
+                "{angle}"
+            );
+            // Also the portable build when the dispatcher picks AVX2.
+            assert_eq!(
+                descriptor_impl(&img, 30, 30, angle),
+                reference_descriptor(&img, 30, 30, angle)
+            );
+            angle += 0.7;
+        }
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! Deliberate differences from ORB-SLAM2 (each keeps or improves accuracy):
 //! - FAST runs once over a whole level at the high threshold and non-maximum suppression sees
 //!   across cell borders (no duplicate corners on cell seams); only cells left empty are
-//!   searched again at the low threshold, inside the cell, as ORB-SLAM2 does.
+//!   searched again at the low threshold, inside the cell, as ORB-SLAM2 does (both passes read
+//!   one score map, see [`super::fast`]).
 //! - Level coordinates map to level-0 pixels through the pixel-centre convention of the
 //!   bilinear resize, `x0 = (x + 0.5) * W0 / Wl - 0.5`, instead of `x * 1.2^l`; the latter is
 //!   biased by up to 1.3 px on the top level.

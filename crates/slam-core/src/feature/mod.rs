@@ -8,6 +8,15 @@
 //! (blur and steered tests), [`pattern`] (our seeded BRIEF sampling pattern) and [`extractor`]
 //! (the whole pipeline). [`test_scene`] renders procedural textures with known geometry for the
 //! tests and benchmarks.
+//!
+//! Speed (single thread, 640x480, 1000 features: about 2.8 ms): every hot loop is written as
+//! straight-line arithmetic over fixed-size chunks of pixels that the compiler turns into vector
+//! instructions, with no `unsafe` indexing. On x86-64 the hot kernels (FAST scores and
+//! suppression, pyramid, blur, descriptor, orientation moments) are also compiled with AVX2
+//! enabled and chosen at run time when the CPU has it; that is the only `unsafe` code (a call
+//! guarded by `is_x86_feature_detected!`). The kernels are integer arithmetic or the same IEEE
+//! float operations in either build, so the output is bit-identical with or without AVX2, and
+//! tests compare both builds with plain reference implementations.
 
 pub mod brief;
 pub mod distribute;

@@ -43,8 +43,26 @@ impl Default for CirclePatch {
 /// Orientation in degrees in [0, 360) of the patch centred on pixel (x, y) of `img`, measured
 /// in image coordinates (x right, y down). The caller keeps the patch inside the image.
 pub fn ic_angle(img: &GrayImage, patch: &CirclePatch, x: usize, y: usize) -> f32 {
+    let (m10, m01) = if patch.radius == HALF_PATCH_SIZE {
+        moments_orb(img, patch, x, y)
+    } else {
+        moments(img, patch, x, y)
+    };
+    let mut a = (m01 as f32).atan2(m10 as f32).to_degrees();
+    if a < 0.0 {
+        a += 360.0;
+    }
+    if a >= 360.0 {
+        a -= 360.0;
+    }
+    a
+}
+
+/// First moments `(m10, m01)` of the disk patch about its centre, any radius.
+fn moments(img: &GrayImage, patch: &CirclePatch, x: usize, y: usize) -> (i64, i64) {
     let w = img.width;
     let r = patch.radius;
+    debug_assert!(r <= x && r <= y);
     let mut m10: i64 = 0;
     let mut m01: i64 = 0;
     for (dv, &um) in patch.umax.iter().enumerate() {
@@ -52,8 +70,7 @@ pub fn ic_angle(img: &GrayImage, patch: &CirclePatch, x: usize, y: usize) -> f32
         for &sign in rows {
             let v = sign * dv as i64;
             let row_start = (y as i64 + v) as usize * w;
-            let xs = x - um;
-            let seg = &img.data[row_start + xs..=row_start + x + um];
+            let seg = &img.data[row_start + x - um..=row_start + x + um];
             let mut sum: i32 = 0;
             let mut weighted: i32 = 0;
             for (i, &p) in seg.iter().enumerate() {
@@ -64,15 +81,65 @@ pub fn ic_angle(img: &GrayImage, patch: &CirclePatch, x: usize, y: usize) -> f32
             m01 += v * sum as i64;
         }
     }
-    debug_assert!(r <= x && r <= y);
-    let mut a = (m01 as f32).atan2(m10 as f32).to_degrees();
-    if a < 0.0 {
-        a += 360.0;
+    (m10, m01)
+}
+
+/// Row width of [`moments_orb`]: the 31 pixels of a radius-15 patch row plus one zero.
+const ORB_ROW: usize = 2 * HALF_PATCH_SIZE + 2;
+
+/// [`moments`] for the ORB radius (15), vectorized: every row of the patch is read as the
+/// same 31 pixels, masked to the disk and summed with the weights `u` in fixed-size arrays
+/// (integer sums, so the moments are exactly those of [`moments`]).
+#[inline]
+fn moments_orb(img: &GrayImage, patch: &CirclePatch, x: usize, y: usize) -> (i64, i64) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: `moments_orb_avx2` only enables AVX2 code generation for safe code; the CPU
+        // supports AVX2, checked on the line above.
+        return unsafe { moments_orb_avx2(img, patch, x, y) };
     }
-    if a >= 360.0 {
-        a -= 360.0;
+    moments_orb_impl(img, patch, x, y)
+}
+
+/// [`moments_orb_impl`] compiled with AVX2 enabled (integer arithmetic: bit-identical to the
+/// baseline build). Call only on a CPU that has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn moments_orb_avx2(img: &GrayImage, patch: &CirclePatch, x: usize, y: usize) -> (i64, i64) {
+    moments_orb_impl(img, patch, x, y)
+}
+
+/// The body of [`moments_orb`].
+#[inline(always)]
+fn moments_orb_impl(img: &GrayImage, patch: &CirclePatch, x: usize, y: usize) -> (i64, i64) {
+    const R: usize = HALF_PATCH_SIZE;
+    let w = img.width;
+    let mut weights = [0i16; ORB_ROW];
+    for (k, u) in weights.iter_mut().enumerate() {
+        *u = k as i16 - R as i16;
     }
-    a
+    let mut m10: i64 = 0;
+    let mut m01: i64 = 0;
+    for yy in y - R..=y + R {
+        let v = yy as i64 - y as i64;
+        let um = patch.umax[v.unsigned_abs() as usize] as i16;
+        let mut row = [0u8; ORB_ROW];
+        row[..2 * R + 1].copy_from_slice(&img.data[yy * w + x - R..=yy * w + x + R]);
+        let mut sum = 0i32;
+        let mut weighted = 0i32;
+        for k in 0..ORB_ROW {
+            let p = if weights[k].abs() <= um {
+                row[k] as i16
+            } else {
+                0
+            };
+            sum += p as i32;
+            weighted += p as i32 * weights[k] as i32;
+        }
+        m10 += weighted as i64;
+        m01 += v * sum as i64;
+    }
+    (m10, m01)
 }
 
 #[cfg(test)]
@@ -89,6 +156,20 @@ mod tests {
             for u in 0..=15 {
                 assert_eq!(u <= p.umax[v], v <= p.umax[u], "({u},{v})");
             }
+        }
+    }
+
+    #[test]
+    fn vectorized_moments_equal_plain_ones() {
+        let img = crate::feature::fast::tests::random_image(70, 50, 8);
+        let p = CirclePatch::default();
+        for (x, y) in [(15, 15), (54, 34), (30, 20), (40, 25)] {
+            assert_eq!(
+                moments_orb(&img, &p, x, y),
+                moments(&img, &p, x, y),
+                "({x}, {y})"
+            );
+            assert_eq!(moments_orb_impl(&img, &p, x, y), moments(&img, &p, x, y));
         }
     }
 

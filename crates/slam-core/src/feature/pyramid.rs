@@ -66,14 +66,12 @@ impl ScaleInfo {
 pub struct Pyramid {
     /// Level `l` is the input resized by `1 / scale_factor^l`; level 0 is a copy of the input.
     pub levels: Vec<GrayImage>,
-    /// Scratch: horizontally interpolated source rows (fixed point, weights of 128; at most
-    /// 255 * 128, so 16 bits suffice and the vertical products vectorize as 16-bit multiplies).
-    row_a: Vec<u16>,
-    row_b: Vec<u16>,
-    /// Scratch: per destination column, the left source column, the right one (clamped) and
-    /// the right one's weight.
+    /// Scratch: the vertically interpolated source row of one destination row (fixed point,
+    /// weights of 128; at most 255 * 128, so 16 bits suffice and the products vectorize as
+    /// 16-bit multiplies), plus one zero so that the right neighbour of the last column exists.
+    vrow: Vec<u16>,
+    /// Scratch: per destination column, the left source column and the right one's weight.
     col_x0: Vec<u32>,
-    col_x1: Vec<u32>,
     col_w: Vec<u16>,
 }
 
@@ -89,6 +87,27 @@ impl Pyramid {
 
     /// Builds all levels of `img` for the tables in `scale`, reusing the buffers.
     pub fn build(&mut self, img: &GrayImage, scale: &ScaleInfo) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: `build_avx2` only enables AVX2 code generation for safe code; the CPU
+            // supports AVX2, checked on the line above.
+            unsafe { self.build_avx2(img, scale) };
+            return;
+        }
+        self.build_impl(img, scale);
+    }
+
+    /// [`Pyramid::build_impl`] compiled with AVX2 enabled (integer arithmetic: bit-identical to
+    /// the baseline build). Call only on a CPU that has AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn build_avx2(&mut self, img: &GrayImage, scale: &ScaleInfo) {
+        self.build_impl(img, scale);
+    }
+
+    /// The body of [`Pyramid::build`].
+    #[inline(always)]
+    fn build_impl(&mut self, img: &GrayImage, scale: &ScaleInfo) {
         self.levels
             .resize_with(scale.n_levels, || GrayImage::new(0, 0));
         let (first, rest) = self.levels.split_first_mut().expect("at least one level");
@@ -104,10 +123,8 @@ impl Pyramid {
                 level,
                 w.max(1),
                 h.max(1),
-                &mut self.row_a,
-                &mut self.row_b,
+                &mut self.vrow,
                 &mut self.col_x0,
-                &mut self.col_x1,
                 &mut self.col_w,
             );
             prev = level;
@@ -117,61 +134,53 @@ impl Pyramid {
 
 /// Bilinear resize of `src` into `dst` (`w x h`), sampling at pixel centres like OpenCV's
 /// `INTER_LINEAR`: destination pixel `x` reads source position `(x + 0.5) * sw / w - 0.5`.
-/// Fixed-point weights of 1/128, rounded to nearest.
-#[allow(clippy::too_many_arguments)]
+/// Fixed-point weights of 1/128, rounded to nearest; the four weighted pixels are summed
+/// exactly and rounded once, so the order of the two passes does not change the result. The
+/// vertical pass runs first, over contiguous source rows (vectorized), and leaves a single
+/// gather per destination pixel for the horizontal one.
+#[inline(always)]
 fn resize_bilinear(
     src: &GrayImage,
     dst: &mut GrayImage,
     w: usize,
     h: usize,
-    row_a: &mut Vec<u16>,
-    row_b: &mut Vec<u16>,
+    vrow: &mut Vec<u16>,
     col_x0: &mut Vec<u32>,
-    col_x1: &mut Vec<u32>,
     col_w: &mut Vec<u16>,
 ) {
     dst.width = w;
     dst.height = h;
     dst.data.resize(w * h, 0);
     let (sw, sh) = (src.width, src.height);
-    // Column table: left source column (clamped so x0 + 1 stays inside) and right weight.
+    // Column table: left source column and right weight (0 on the last source column, whose
+    // right neighbour is the zero padding of `vrow`).
     col_x0.clear();
-    col_x1.clear();
     col_w.clear();
     let sx = sw as f64 / w as f64;
     for x in 0..w {
         let (x0, f) = sample_pos(x, sx, sw);
         col_x0.push(x0 as u32);
-        col_x1.push((x0 + 1).min(sw - 1) as u32);
         col_w.push(f as u16);
     }
-    row_a.resize(w, 0);
-    row_b.resize(w, 0);
+    vrow.clear();
+    vrow.resize(sw + 1, 0);
     let sy = sh as f64 / h as f64;
-    let (mut have_a, mut have_b) = (usize::MAX, usize::MAX);
+    let one = RESIZE_ONE as u16;
+    let half = 1u32 << (2 * RESIZE_BITS - 1);
     for y in 0..h {
         let (y0, fy) = sample_pos(y, sy, sh);
         let y1 = (y0 + 1).min(sh - 1);
-        // Reuse the interpolated rows of the previous destination row when possible.
-        if have_a != y0 {
-            if have_b == y0 {
-                std::mem::swap(row_a, row_b);
-                std::mem::swap(&mut have_a, &mut have_b);
-            } else {
-                hinterp(src.row(y0), col_x0, col_x1, col_w, row_a);
-                have_a = y0;
-            }
+        let (gy0, gy1) = (one - fy as u16, fy as u16);
+        let (ra, rb) = (src.row(y0), src.row(y1));
+        for ((v, &a), &b) in vrow[..sw].iter_mut().zip(ra).zip(rb) {
+            *v = a as u16 * gy0 + b as u16 * gy1;
         }
-        if have_b != y1 {
-            hinterp(src.row(y1), col_x0, col_x1, col_w, row_b);
-            have_b = y1;
-        }
-        let gy1 = fy as u16;
-        let gy0 = (RESIZE_ONE - fy) as u16;
+        // Plain slices, so the compiler keeps their bounds in registers across the stores.
+        let (vr, xs, fs): (&[u16], &[u32], &[u16]) = (vrow, col_x0, col_w);
         let out = &mut dst.data[y * w..(y + 1) * w];
-        let half = 1u32 << (2 * RESIZE_BITS - 1);
-        for ((o, &a), &b) in out.iter_mut().zip(row_a.iter()).zip(row_b.iter()) {
-            let v = a as u32 * gy0 as u32 + b as u32 * gy1 as u32 + half;
+        for ((o, &x0), &f) in out.iter_mut().zip(xs).zip(fs) {
+            let pair = &vr[x0 as usize..x0 as usize + 2];
+            let v = pair[0] as u32 * (one - f) as u32 + pair[1] as u32 * f as u32 + half;
             *o = (v >> (2 * RESIZE_BITS)) as u8;
         }
     }
@@ -189,17 +198,6 @@ fn sample_pos(i: usize, s: f64, n: usize) -> (usize, u32) {
         ((pos - i0 as f64) * RESIZE_ONE as f64).round() as u32
     };
     (i0, f.min(RESIZE_ONE))
-}
-
-/// Horizontal interpolation of one source row into `out` (fixed point, times 128).
-#[inline]
-fn hinterp(row: &[u8], col_x0: &[u32], col_x1: &[u32], col_w: &[u16], out: &mut [u16]) {
-    let one = RESIZE_ONE as u16;
-    for (((o, &x0), &x1), &f) in out.iter_mut().zip(col_x0).zip(col_x1).zip(col_w) {
-        let a = row[x0 as usize] as u16;
-        let b = row[x1 as usize] as u16;
-        *o = a * (one - f) + b * f;
-    }
 }
 
 /// Row access used by the pyramid and the detectors.
@@ -233,6 +231,40 @@ mod tests {
         assert!((s.log_scale_factor - 1.2f64.ln()).abs() < 1e-15);
         assert_eq!(s.level_size(640, 480, 1), (533, 400));
         assert_eq!(s.level_size(640, 480, 7), (179, 134));
+    }
+
+    #[test]
+    fn resize_equals_direct_bilinear_formula() {
+        // Odd sizes, a 1-pixel-wide level and an upscale exercise the clamped borders.
+        let img = crate::feature::fast::tests::random_image(67, 41, 4);
+        for (w, h) in [(56usize, 34usize), (1, 3), (67, 41), (80, 50), (2, 1)] {
+            let mut out = GrayImage::new(0, 0);
+            let (mut v, mut x0s, mut fs) = (Vec::new(), Vec::new(), Vec::new());
+            resize_bilinear(&img, &mut out, w, h, &mut v, &mut x0s, &mut fs);
+            assert_eq!((out.width, out.height), (w, h));
+            for y in 0..h {
+                let (y0, fy) = sample_pos(y, 41.0 / h as f64, 41);
+                let y1 = (y0 + 1).min(40);
+                for x in 0..w {
+                    let (x0, fx) = sample_pos(x, 67.0 / w as f64, 67);
+                    let x1 = (x0 + 1).min(66);
+                    let p = |xx: usize, yy: usize| img.get(xx, yy) as u32;
+                    let sum = (p(x0, y0) * (128 - fx) + p(x1, y0) * fx) * (128 - fy)
+                        + (p(x0, y1) * (128 - fx) + p(x1, y1) * fx) * fy;
+                    assert_eq!(
+                        out.get(x, y) as u32,
+                        (sum + 8192) >> 14,
+                        "{w}x{h} ({x},{y})"
+                    );
+                }
+            }
+        }
+        // The dispatched build of the whole pyramid agrees with the portable one.
+        let scale = ScaleInfo::new(8, 1.2);
+        let (mut a, mut b) = (Pyramid::new(), Pyramid::new());
+        a.build(&img, &scale);
+        b.build_impl(&img, &scale);
+        assert_eq!(a.levels, b.levels);
     }
 
     #[test]

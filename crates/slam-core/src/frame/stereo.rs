@@ -149,6 +149,7 @@ pub fn compute_stereo_matches(
     let mut sads = vec![0u32; 2 * params.sad_search + 1];
     let mut ssds = vec![0u64; 2 * params.sad_search + 1];
     let mut accepted: Vec<(u32, usize)> = Vec::new();
+    let mut sad_scratch = SadScratch::default();
 
     for (i, kp_l) in input.left.iter().enumerate() {
         let v_l = kp_l.y as f64;
@@ -205,31 +206,20 @@ pub fn compute_stereo_matches(
         if su_r0 - l - w < 0 || su_r0 + l + w >= rw || sv_l + w >= img_r.height as isize {
             continue;
         }
+        let win = (2 * w + 1) as usize;
+        let n_inc = (2 * l + 1) as usize;
+        sad_curve(
+            (img_l, (su_l - w) as usize),
+            (img_r, (su_r0 - l - w) as usize),
+            (sv_l - w) as usize,
+            win,
+            &mut sad_scratch,
+            &mut sads[..n_inc],
+            &mut ssds[..n_inc],
+        );
         let mut best_sad = u32::MAX;
         let mut best_inc = 0isize;
-        // Window means (the brightness offset between the two cameras is removed with them).
-        let win = (2 * w + 1) as usize;
-        let sum_l = window_sum(&img_l.data, lw, su_l - w, sv_l - w, win);
-        for inc in -l..=l {
-            let ur = su_r0 + inc;
-            let sum_r = window_sum(&img_r.data, rw, ur - w, sv_l - w, win);
-            // Offset rounded to whole grey levels keeps the arithmetic in integers.
-            let offset = (sum_l - sum_r).div_euclid((win * win) as i32);
-            let mut sad = 0u32;
-            let mut ssd = 0u64;
-            for dy in -w..=w {
-                let rl = ((sv_l + dy) * lw + su_l - w) as usize;
-                let rr = ((sv_l + dy) * rw + ur - w) as usize;
-                let a = &img_l.data[rl..rl + win];
-                let b = &img_r.data[rr..rr + win];
-                for (&pa, &pb) in a.iter().zip(b) {
-                    let e = pa as i32 - pb as i32 - offset;
-                    sad += e.unsigned_abs();
-                    ssd += (e * e) as u64;
-                }
-            }
-            sads[(inc + l) as usize] = sad;
-            ssds[(inc + l) as usize] = ssd;
+        for (inc, &sad) in (-l..=l).zip(sads.iter()) {
             if sad < best_sad {
                 best_sad = sad;
                 best_inc = inc;
@@ -277,19 +267,141 @@ pub fn compute_stereo_matches(
     (u_right, depth)
 }
 
-/// Sum of the `n x n` window with top-left corner (x0, y0) of a row-major image of width `w`.
-fn window_sum(data: &[u8], w: isize, x0: isize, y0: isize, n: usize) -> i32 {
-    (0..n as isize)
-        .map(|dy| {
-            let r = ((y0 + dy) * w + x0) as usize;
-            data[r..r + n].iter().map(|&p| p as i32).sum::<i32>()
-        })
-        .sum()
+/// Shifts of the SAD curve evaluated together (one AVX2 register pair of `i32` lanes).
+const SAD_LANES: usize = 16;
+
+/// Buffers of [`sad_curve`], kept for a whole matching call.
+#[derive(Default)]
+struct SadScratch {
+    /// Column sums of the right rows under the window, over every shift.
+    colsum: Vec<i32>,
+    /// Mean difference per shift, whole grey levels.
+    offsets: Vec<i32>,
+    /// One right row segment, zero-padded to whole chunks of shifts.
+    rrow: Vec<u8>,
+}
+
+/// The SAD and SSD curves of the window correlation: for each of the `sads.len()` shifts `s`,
+/// the `win x win` window of the left level with top-left corner `(left.1, y0)` against the one
+/// of the right level at `(right.1 + s, y0)`, after removing the difference of the window sums
+/// divided by the window area and rounded down to whole grey levels (integers throughout, so
+/// the curves are exact). Windows up to 8000 px wide (the per-row sums are 32-bit).
+///
+/// Vectorized over the shifts: for each left pixel, the right pixels it meets at
+/// `SAD_LANES` consecutive shifts are contiguous, so one row of the window costs `win` vector
+/// steps instead of `win * shifts` scalar ones.
+fn sad_curve(
+    left: (&GrayImage, usize),
+    right: (&GrayImage, usize),
+    y0: usize,
+    win: usize,
+    scratch: &mut SadScratch,
+    sads: &mut [u32],
+    ssds: &mut [u64],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: `sad_curve_avx2` only enables AVX2 code generation for safe code; the CPU
+        // supports AVX2, checked on the line above.
+        unsafe { sad_curve_avx2(left, right, y0, win, scratch, sads, ssds) };
+        return;
+    }
+    sad_curve_impl(left, right, y0, win, scratch, sads, ssds);
+}
+
+/// [`sad_curve_impl`] compiled with AVX2 enabled (integer arithmetic: bit-identical to the
+/// baseline build). Call only on a CPU that has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn sad_curve_avx2(
+    left: (&GrayImage, usize),
+    right: (&GrayImage, usize),
+    y0: usize,
+    win: usize,
+    scratch: &mut SadScratch,
+    sads: &mut [u32],
+    ssds: &mut [u64],
+) {
+    sad_curve_impl(left, right, y0, win, scratch, sads, ssds);
+}
+
+/// The body of [`sad_curve`].
+#[inline(always)]
+fn sad_curve_impl(
+    (img_l, lx0): (&GrayImage, usize),
+    (img_r, rx0): (&GrayImage, usize),
+    y0: usize,
+    win: usize,
+    scratch: &mut SadScratch,
+    sads: &mut [u32],
+    ssds: &mut [u64],
+) {
+    const L: usize = SAD_LANES;
+    let n = sads.len();
+    let span = win + n - 1;
+    let (lw, rw) = (img_l.width, img_r.width);
+    let right_row = |dy: usize| &img_r.data[(y0 + dy) * rw + rx0..][..span];
+    let left_row = |dy: usize| &img_l.data[(y0 + dy) * lw + lx0..][..win];
+    // Window sums: the left one, and the right ones from column sums.
+    let sum_l: i32 = (0..win)
+        .map(|dy| left_row(dy).iter().map(|&p| p as i32).sum::<i32>())
+        .sum();
+    let colsum = &mut scratch.colsum;
+    colsum.clear();
+    colsum.resize(span, 0);
+    for dy in 0..win {
+        for (c, &p) in colsum.iter_mut().zip(right_row(dy)) {
+            *c += p as i32;
+        }
+    }
+    let area = (win * win) as i32;
+    scratch.offsets.clear();
+    scratch.offsets.extend(
+        colsum
+            .windows(win)
+            .map(|cols| (sum_l - cols.iter().sum::<i32>()).div_euclid(area)),
+    );
+    let rrow = &mut scratch.rrow;
+    rrow.clear();
+    rrow.resize(n.next_multiple_of(L) + win - 1, 0);
+    for c0 in (0..n).step_by(L) {
+        // Offsets are mean differences, within [-255, 255], so every error fits 16 bits
+        // (|e| <= 510) and the products are 16 x 16 -> 32-bit multiplies, cheap even on SSE2.
+        let mut off = [0i16; L];
+        for (o, &v) in off.iter_mut().zip(&scratch.offsets[c0..]) {
+            *o = v as i16;
+        }
+        let mut sad = [0u32; L];
+        let mut ssd = [0u64; L];
+        for dy in 0..win {
+            rrow[..span].copy_from_slice(right_row(dy));
+            let mut row_sad = [0i32; L];
+            let mut row_ssd = [0i32; L];
+            for (j, &a) in left_row(dy).iter().enumerate() {
+                let b: &[u8; L] = rrow[c0 + j..c0 + j + L].try_into().expect("L bytes");
+                for k in 0..L {
+                    let e = a as i16 - b[k] as i16 - off[k];
+                    row_sad[k] += e.abs() as i32;
+                    row_ssd[k] += e as i32 * e as i32;
+                }
+            }
+            for k in 0..L {
+                sad[k] += row_sad[k] as u32;
+                ssd[k] += row_ssd[k] as u64;
+            }
+        }
+        let m = (n - c0).min(L);
+        sads[c0..c0 + m].copy_from_slice(&sad[..m]);
+        ssds[c0..c0 + m].copy_from_slice(&ssd[..m]);
+    }
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use std::sync::Arc;
+
+    use super::{sad_curve, sad_curve_impl, SadScratch};
+    use crate::image::GrayImage;
 
     use crate::camera::{Camera, SensorKind};
     use crate::feature::test_scene::TestScene;
@@ -322,6 +434,78 @@ pub(crate) mod tests {
             27.65
         } else {
             41.45
+        }
+    }
+
+    /// The correlation curve computed directly from its definition.
+    fn reference_curve(
+        l: &GrayImage,
+        r: &GrayImage,
+        (lx0, rx0, y0): (usize, usize, usize),
+        win: usize,
+        n: usize,
+    ) -> (Vec<u32>, Vec<u64>) {
+        let sum = |img: &GrayImage, x0: usize| -> i32 {
+            (0..win)
+                .flat_map(|dy| (0..win).map(move |dx| (dx, dy)))
+                .map(|(dx, dy)| img.get(x0 + dx, y0 + dy) as i32)
+                .sum()
+        };
+        let (mut sads, mut ssds) = (Vec::new(), Vec::new());
+        for s in 0..n {
+            let offset = (sum(l, lx0) - sum(r, rx0 + s)).div_euclid((win * win) as i32);
+            let (mut sad, mut ssd) = (0u32, 0u64);
+            for dy in 0..win {
+                for dx in 0..win {
+                    let e = l.get(lx0 + dx, y0 + dy) as i32
+                        - r.get(rx0 + s + dx, y0 + dy) as i32
+                        - offset;
+                    sad += e.unsigned_abs();
+                    ssd += (e * e) as u64;
+                }
+            }
+            sads.push(sad);
+            ssds.push(ssd);
+        }
+        (sads, ssds)
+    }
+
+    #[test]
+    fn sad_curve_equals_direct_correlation() {
+        let l = crate::feature::fast::tests::random_image(90, 40, 31);
+        let r = crate::feature::fast::tests::random_image(90, 40, 32);
+        let mut scratch = SadScratch::default();
+        // The default 11 x 11 window over 11 shifts, more shifts than one chunk, tiny windows.
+        for (win, n, lx0, rx0, y0) in [
+            (11, 11, 20, 14, 5),
+            (11, 23, 40, 3, 20),
+            (3, 5, 0, 80, 37),
+            (1, 16, 7, 9, 0),
+            (7, 17, 30, 60, 10),
+        ] {
+            let mut sads = vec![0; n];
+            let mut ssds = vec![0; n];
+            sad_curve(
+                (&l, lx0),
+                (&r, rx0),
+                y0,
+                win,
+                &mut scratch,
+                &mut sads,
+                &mut ssds,
+            );
+            let want = reference_curve(&l, &r, (lx0, rx0, y0), win, n);
+            assert_eq!((sads.clone(), ssds.clone()), want, "win {win} n {n}");
+            sad_curve_impl(
+                (&l, lx0),
+                (&r, rx0),
+                y0,
+                win,
+                &mut scratch,
+                &mut sads,
+                &mut ssds,
+            );
+            assert_eq!((sads, ssds), want, "portable, win {win} n {n}");
         }
     }
 
