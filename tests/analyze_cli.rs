@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_ok, noisefree, tmpdir};
+use common::{assert_clean_failure, assert_ok, noisefree, tmpdir};
 
 #[test]
 fn correlation_writes_table_two_with_valid_coefficients() {
@@ -130,13 +130,11 @@ fn bad_arguments_fail_cleanly() {
         "--out",
         d.to_str().unwrap(),
     ]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("nope"));
+    assert_clean_failure(&out, "nope");
     let out = noisefree(&[
         "analyze", "outliers", "--preset", "kinect", "--frames", "5", "--frame", "9",
     ]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--frame 9"));
+    assert_clean_failure(&out, "--frame 9");
 }
 
 /// Width and height from a PNG's IHDR chunk.

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{noisefree, tmpdir};
+use common::{assert_clean_failure, noisefree, tmpdir};
 
 #[test]
 fn default_run_writes_outputs_and_is_reproducible() {
@@ -73,20 +73,13 @@ fn several_runs_write_a_folder_each_and_a_summary() {
 #[test]
 fn unknown_sequence_suggests_names() {
     let out = noisefree(&["run", "--seq", "fr2_cok", "--quiet"]);
-    assert!(!out.status.success());
-    let e = String::from_utf8_lossy(&out.stderr);
-    assert!(e.contains("fr2_coke") && !e.contains("panicked"), "{e}");
+    assert_clean_failure(&out, "fr2_coke");
 }
 
 #[test]
 fn missing_folder_and_missing_dataset_are_clean_errors() {
     let out = noisefree(&["run", "--path", "/no/such/sequence", "--quiet"]);
-    assert!(!out.status.success());
-    let e = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        e.contains("/no/such/sequence") && !e.contains("panicked"),
-        "{e}"
-    );
+    assert_clean_failure(&out, "/no/such/sequence");
     let empty = tmpdir("data");
     std::fs::create_dir_all(&empty).unwrap();
     let out = noisefree(&[
@@ -97,9 +90,7 @@ fn missing_folder_and_missing_dataset_are_clean_errors() {
         empty.to_str().unwrap(),
         "--quiet",
     ]);
-    assert!(!out.status.success());
-    let e = String::from_utf8_lossy(&out.stderr);
-    assert!(e.contains("noisefree fetch fr1_desk"), "{e}");
+    assert_clean_failure(&out, "noisefree fetch fr1_desk");
 }
 
 #[test]
@@ -116,9 +107,7 @@ fn bad_config_file_is_a_clean_error() {
         p.to_str().unwrap(),
         "--quiet",
     ]);
-    assert!(!out.status.success());
-    let e = String::from_utf8_lossy(&out.stderr);
-    assert!(e.contains("bad.toml") && !e.contains("panicked"), "{e}");
+    assert_clean_failure(&out, "bad.toml");
 }
 
 #[test]

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeSet;
 
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector2, Vector3};
 
 use super::RotationHistogram;
 use crate::camera::Camera;
@@ -38,14 +38,7 @@ pub fn is_in_frustum(
     levels: &ScaleLevels,
     view_cos_limit: f64,
 ) -> Option<VisiblePoint> {
-    let pc = tcw.transform_point(&Point3::from(mp.position));
-    if pc.z <= 0.0 {
-        return None;
-    }
-    let uv = camera.project(&pc.coords);
-    if !camera.in_image(uv.x, uv.y) {
-        return None;
-    }
+    let (pc, uv) = project_into_image(tcw, &mp.position, camera)?;
     let po = mp.position - center;
     let dist = po.norm();
     if dist < 0.8 * mp.min_distance || dist > 1.2 * mp.max_distance {
@@ -158,14 +151,9 @@ pub fn search_by_projection_last_frame(
         let Some(mp) = map.map_point(id) else {
             continue;
         };
-        let pc = tcw.transform_point(&Point3::from(mp.position));
-        if pc.z <= 0.0 {
+        let Some((pc, uv)) = project_into_image(&tcw, &mp.position, camera) else {
             continue;
-        }
-        let uv = camera.project(&pc.coords);
-        if !camera.in_image(uv.x, uv.y) {
-            continue;
-        }
+        };
         let last_octave = last.features.keypoints[i].octave as i32;
         let radius = th * levels.scale(last_octave as usize);
         let candidates = if forward {
@@ -228,14 +216,9 @@ pub fn search_by_projection_keyframe(
         let Some(mp) = map.map_point(id) else {
             continue;
         };
-        let pc = tcw.transform_point(&Point3::from(mp.position));
-        if pc.z <= 0.0 {
+        let Some((_, uv)) = project_into_image(&tcw, &mp.position, camera) else {
             continue;
-        }
-        let uv = camera.project(&pc.coords);
-        if !camera.in_image(uv.x, uv.y) {
-            continue;
-        }
+        };
         let dist = (mp.position - center).norm();
         if dist < mp.min_distance || dist > mp.max_distance {
             continue;
@@ -258,6 +241,21 @@ pub fn search_by_projection_keyframe(
         }
     }
     n - unmatch_rotation_outliers(current, &hist)
+}
+
+/// The camera-frame point and pixel of world point `position` seen with pose `tcw`, if it lies
+/// in front of the camera and inside the image.
+fn project_into_image(
+    tcw: &Isometry3<f64>,
+    position: &Vector3<f64>,
+    camera: &Camera,
+) -> Option<(Point3<f64>, Vector2<f64>)> {
+    let pc = tcw.transform_point(&Point3::from(*position));
+    if pc.z <= 0.0 {
+        return None;
+    }
+    let uv = camera.project(&pc.coords);
+    camera.in_image(uv.x, uv.y).then_some((pc, uv))
 }
 
 /// Whether keypoint `idx` of `frame` is already matched to a map point some keyframe observes
