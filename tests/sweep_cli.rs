@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{noisefree_ok, tmpdir};
+use common::{assert_clean_failure, assert_ok, noisefree, noisefree_ok, tmpdir};
 use std::path::Path;
 
 const FRAMES: &str = "40";
@@ -161,4 +161,43 @@ fn vary_sequence_gives_each_run_its_own_realization() {
         rows[0][7], rows[1][7],
         "different noise realizations give different ATEs"
     );
+}
+
+#[test]
+fn mapping_lag_is_pinned_per_folder() {
+    let tiny = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            "--seq",
+            "kinect",
+            "--configs",
+            "orb",
+            "--runs",
+            "1",
+            "--frames",
+            "20",
+            "--quiet",
+            "--jobs",
+            "1",
+            "--out",
+        ];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        noisefree(&args)
+    };
+    // A synchronous folder refuses lagged runs (they would be resumed as the recorded ones).
+    let sync = tmpdir("lag-sync");
+    assert_ok(&tiny(&sync, &[]));
+    assert!(!sync.join("sweep-settings.toml").exists());
+    assert_clean_failure(&tiny(&sync, &["--mapping-lag", "2"]), "--mapping-lag 0");
+    // A fresh folder takes the lag, records it, resumes with it and refuses another.
+    let lagged = tmpdir("lag-2");
+    assert_ok(&tiny(&lagged, &["--mapping-lag", "2"]));
+    let settings = std::fs::read_to_string(lagged.join("sweep-settings.toml")).unwrap();
+    assert!(settings.contains("mapping_lag = 2"), "{settings}");
+    assert_ok(&tiny(&lagged, &["--mapping-lag", "2"]));
+    assert_clean_failure(&tiny(&lagged, &[]), "--mapping-lag 2");
+    for d in [sync, lagged] {
+        let _ = std::fs::remove_dir_all(d);
+    }
 }

@@ -6,7 +6,7 @@ use crate::config_file::{base_config, overlay_file};
 use crate::runner::run_sequence;
 use crate::select::{load, LoadOptions, Source};
 use crate::sweep::plan::{expand, parse_values, ConfigKind, Grids, Job, Shard};
-use crate::sweep::store::{RunRecord, RunStore};
+use crate::sweep::store::{pin_mapping_lag, RunRecord, RunStore};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{write_atomic, write_tum};
 use datasets::{Catalog, Class, EntryFormat};
@@ -219,6 +219,12 @@ pub fn run(args: SweepArgs) -> Result<()> {
         }
     }
     let store = RunStore::open(&args.out, shard)?;
+    let mapping_lag = match (args.mapping_lag, &args.config) {
+        (Some(n), _) => n,
+        (None, Some(p)) => overlay_file(&Config::default(), p)?.mapping_lag,
+        (None, None) => 0,
+    };
+    pin_mapping_lag(&args.out, mapping_lag)?;
     let mine: Vec<&Job> = all_jobs
         .iter()
         .enumerate()

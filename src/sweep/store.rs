@@ -79,6 +79,52 @@ impl RunRecord {
     }
 }
 
+/// The file that pins a sweep folder's emulated local-mapping lag (`--mapping-lag`). A folder
+/// without it was swept synchronously (lag 0), as every sweep before the option existed.
+pub const SETTINGS_FILE: &str = "sweep-settings.toml";
+
+/// Makes sure every run recorded in `dir` uses mapping lag `lag`: the lag is not part of a
+/// run's key, so runs of different lags in one folder would be resumed as each other and
+/// averaged together. A folder with runs of another lag is an error; a folder without runs
+/// takes the new lag (recorded in [`SETTINGS_FILE`] when it is not 0).
+pub fn pin_mapping_lag(dir: &Path, lag: u32) -> Result<()> {
+    let path = dir.join(SETTINGS_FILE);
+    let recorded = match std::fs::read_to_string(&path) {
+        Ok(text) => {
+            let v: toml::Value = toml::from_str(&text)
+                .with_context(|| format!("{}: not valid TOML", path.display()))?;
+            v.get("mapping_lag")
+                .and_then(toml::Value::as_integer)
+                .and_then(|x| u32::try_from(x).ok())
+                .with_context(|| format!("{}: no valid mapping_lag", path.display()))?
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => 0,
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+    };
+    if recorded == lag {
+        return Ok(());
+    }
+    if !load_dir(dir)?.is_empty() {
+        bail!(
+            "{} holds runs made with --mapping-lag {recorded}; this sweep asks for {lag}: use \
+             another --out folder (runs of different lags would be resumed as each other and \
+             averaged together)",
+            dir.display()
+        );
+    }
+    if lag == 0 {
+        return std::fs::remove_file(&path).with_context(|| format!("removing {}", path.display()));
+    }
+    ate_eval::io::write_atomic(
+        &path,
+        format!(
+            "# the emulated local-mapping lag of every run in this folder\nmapping_lag = {lag}\n"
+        )
+        .as_bytes(),
+    )
+    .with_context(|| format!("writing {}", path.display()))
+}
+
 /// File name of the record of a shard (or of an unsharded sweep).
 pub fn file_name(shard: Option<Shard>) -> String {
     match shard {
