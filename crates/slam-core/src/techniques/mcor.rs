@@ -32,8 +32,9 @@
 //! - **What a frame's gate rejects.** For pose-only optimization each cluster contributes a
 //!   single edge, the current frame's keypoint, so Algorithm 1's `selected_features` reduces to:
 //!   the match is kept iff its cluster passes the CL test and X_cur passes the FL test.
-//!   [`McorCluster::select`] runs Algorithm 1 over all features of a cluster (for gating bundle
-//!   adjustment observations).
+//!   [`McorCluster::select`] runs Algorithm 1 over all features of a cluster, which is what
+//!   gating bundle-adjustment observations would need; the system does not gate local BA (it
+//!   keeps ORB-SLAM2's chi2 erasure there, see [`crate::module::pose_estimation`]).
 //! - **Matches without depth.** A keypoint without measured depth has no 3-D feature: it is not
 //!   FL-tested, but it is still subject to its landmark's CL test (the paper: when the CL metrics
 //!   are high "the landmark is bad to consider as an interest point"), computed over the cluster
