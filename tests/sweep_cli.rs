@@ -197,6 +197,13 @@ fn mapping_lag_is_pinned_per_folder() {
     assert!(settings.contains("mapping_lag = 2"), "{settings}");
     assert_ok(&tiny(&lagged, &["--mapping-lag", "2"]));
     assert_clean_failure(&tiny(&lagged, &[]), "--mapping-lag 2");
+    // The tables say how the runs were made.
+    noisefree_ok(&["table", lagged.to_str().unwrap()]);
+    noisefree_ok(&["table", sync.to_str().unwrap()]);
+    let t3 = std::fs::read_to_string(lagged.join("table3.md")).unwrap();
+    assert!(t3.contains("--mapping-lag 2"), "{t3}");
+    let t3 = std::fs::read_to_string(sync.join("table3.md")).unwrap();
+    assert!(t3.contains("Runs are synchronous"), "{t3}");
     for d in [sync, lagged] {
         let _ = std::fs::remove_dir_all(d);
     }

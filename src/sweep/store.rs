@@ -83,24 +83,31 @@ impl RunRecord {
 /// without it was swept synchronously (lag 0), as every sweep before the option existed.
 pub const SETTINGS_FILE: &str = "sweep-settings.toml";
 
-/// Makes sure every run recorded in `dir` uses mapping lag `lag`: the lag is not part of a
-/// run's key, so runs of different lags in one folder would be resumed as each other and
-/// averaged together. A folder with runs of another lag is an error; a folder without runs
-/// takes the new lag (recorded in [`SETTINGS_FILE`] when it is not 0).
-pub fn pin_mapping_lag(dir: &Path, lag: u32) -> Result<()> {
+/// The emulated local-mapping lag of the runs in sweep folder `dir` ([`SETTINGS_FILE`]; 0 when
+/// absent).
+pub fn mapping_lag_of(dir: &Path) -> Result<u32> {
     let path = dir.join(SETTINGS_FILE);
-    let recorded = match std::fs::read_to_string(&path) {
+    match std::fs::read_to_string(&path) {
         Ok(text) => {
             let v: toml::Value = toml::from_str(&text)
                 .with_context(|| format!("{}: not valid TOML", path.display()))?;
             v.get("mapping_lag")
                 .and_then(toml::Value::as_integer)
                 .and_then(|x| u32::try_from(x).ok())
-                .with_context(|| format!("{}: no valid mapping_lag", path.display()))?
+                .with_context(|| format!("{}: no valid mapping_lag", path.display()))
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => 0,
-        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
-    };
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(0),
+        Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
+    }
+}
+
+/// Makes sure every run recorded in `dir` uses mapping lag `lag`: the lag is not part of a
+/// run's key, so runs of different lags in one folder would be resumed as each other and
+/// averaged together. A folder with runs of another lag is an error; a folder without runs
+/// takes the new lag (recorded in [`SETTINGS_FILE`] when it is not 0).
+pub fn pin_mapping_lag(dir: &Path, lag: u32) -> Result<()> {
+    let path = dir.join(SETTINGS_FILE);
+    let recorded = mapping_lag_of(dir)?;
     if recorded == lag {
         return Ok(());
     }
