@@ -222,6 +222,26 @@ pub struct System {
     pending: VecDeque<PendingKeyFrame>,
 }
 
+/// What local mapping needs of the system (a free function, so that the map and the mapper
+/// stay mutably borrowable beside it).
+fn mapping_context<'a>(
+    camera: &'a Camera,
+    levels: &'a ScaleLevels,
+    config: &'a Config,
+    ba: &'a BaConfig,
+) -> MappingContext<'a> {
+    MappingContext {
+        camera,
+        levels,
+        params: &config.mapping,
+        ba,
+        hooks: NoiseHooks {
+            mcor: config.mcor.as_ref(),
+            avc: config.avc.as_ref(),
+        },
+    }
+}
+
 /// A keyframe waiting for local mapping (emulated mapping lag).
 #[derive(Clone, Debug)]
 struct PendingKeyFrame {
@@ -427,16 +447,7 @@ impl System {
         self.tracker.local_keyframes = vec![kf];
         self.tracker.local_points = created.clone();
         self.last_keyframe_frame = cur.id;
-        let ctx = MappingContext {
-            camera: &self.camera,
-            levels: &self.levels,
-            params: &self.config.mapping,
-            ba: &self.ba_cfg,
-            hooks: NoiseHooks {
-                mcor: self.config.mcor.as_ref(),
-                avc: self.config.avc.as_ref(),
-            },
-        };
+        let ctx = mapping_context(&self.camera, &self.levels, &self.config, &self.ba_cfg);
         Some(self.mapper.process(kf, created, &mut self.map, &ctx))
     }
 
@@ -586,16 +597,7 @@ impl System {
             if self.map.keyframe(p.kf).is_none() {
                 continue;
             }
-            let ctx = MappingContext {
-                camera: &self.camera,
-                levels: &self.levels,
-                params: &self.config.mapping,
-                ba: &self.ba_cfg,
-                hooks: NoiseHooks {
-                    mcor: self.config.mcor.as_ref(),
-                    avc: self.config.avc.as_ref(),
-                },
-            };
+            let ctx = mapping_context(&self.camera, &self.levels, &self.config, &self.ba_cfg);
             let r = self.mapper.process(p.kf, p.created, &mut self.map, &ctx);
             total.time_mapping_ms += r.time_mapping_ms;
             total.time_ba_ms += r.time_ba_ms;
