@@ -14,7 +14,7 @@ use slam_core::feature::orientation::{ic_angle, CirclePatch};
 use slam_core::feature::test_scene::{test_frame, TestScene};
 use slam_core::feature::{OrbConfig, OrbExtractor, Pyramid, EDGE_THRESHOLD};
 use slam_core::frame::Frame;
-use slam_core::{Camera, FrameInput, GrayImage, SensorKind};
+use slam_core::{Camera, FrameInput, GrayImage};
 
 fn stages(c: &mut Criterion) {
     let img = test_frame(1);
@@ -102,19 +102,7 @@ fn stereo(c: &mut Criterion) {
     let scene = TestScene::random(752.0, 480.0, 450, 3);
     let left = scene.render(752, 480, |u, v| (u, v));
     let right = scene.render(752, 480, |u, v| (u + 20.0 + 0.03 * v, v));
-    let camera = Camera {
-        fx: 435.2,
-        fy: 435.2,
-        cx: 367.45,
-        cy: 252.2,
-        width: 752,
-        height: 480,
-        distortion: None,
-        bf: 47.9,
-        th_depth: 35.0,
-        fps: 20.0,
-        sensor: SensorKind::Stereo,
-    };
+    let camera = Camera::euroc_rectified();
     let input = FrameInput {
         timestamp: 0.0,
         image: Arc::new(left),

@@ -76,6 +76,24 @@ impl Camera {
         }
     }
 
+    /// The rectified EuRoC stereo camera of ORB-SLAM2's EuRoC.yaml (752x480, bf 47.9, ThDepth
+    /// 35, 20 Hz): the left camera after rectification, as the stereo benchmarks and tests use.
+    pub fn euroc_rectified() -> Self {
+        Camera {
+            fx: 435.2,
+            fy: 435.2,
+            cx: 367.45,
+            cy: 252.2,
+            width: 752,
+            height: 480,
+            distortion: None,
+            bf: 47.9,
+            th_depth: 35.0,
+            fps: 20.0,
+            sensor: SensorKind::Stereo,
+        }
+    }
+
     /// Stereo baseline in metres (`bf / fx`).
     pub fn baseline(&self) -> f64 {
         self.bf / self.fx

@@ -15,7 +15,7 @@ use std::sync::Arc;
 
 use super::brief::{compute_descriptor, gaussian_blur};
 use super::distribute::{distribute, QuadScratch};
-use super::fast::{detect_adaptive, CellLayout, Corner, FastScratch, Rect};
+use super::fast::{detect_adaptive, CellLayout, Corner, FastScratch};
 use super::orientation::{ic_angle, CirclePatch};
 use super::pyramid::{Pyramid, ScaleInfo};
 use super::{Descriptor, KeyPoint, EDGE_THRESHOLD};
@@ -250,31 +250,10 @@ pub fn detect_level(
     cell_counts: &mut Vec<u32>,
     out: &mut Vec<Corner>,
 ) {
-    let (w, h) = (lvl.width, lvl.height);
-    let e = EDGE_THRESHOLD;
-    if w <= 2 * e + 1 || h <= 2 * e + 1 {
+    let Some((area, cells)) =
+        CellLayout::orb_slam2(lvl.width, lvl.height, EDGE_THRESHOLD, CELL_SIZE)
+    else {
         return;
-    }
-    let area = Rect {
-        x0: e,
-        y0: e,
-        x1: w - e,
-        y1: h - e,
-    };
-    // Cells as ORB-SLAM2 lays them out over [16, dim - 16]: floor(dim / 30) of them, each
-    // ceil(dim / n) wide; detection inside a cell is 3 px in from the cell window.
-    let (aw, ah) = (w - 2 * (e - 3), h - 2 * (e - 3));
-    let n_cols = (aw / CELL_SIZE).max(1);
-    let n_rows = (ah / CELL_SIZE).max(1);
-    let cells = CellLayout {
-        x0: e,
-        y0: e,
-        cw: aw.div_ceil(n_cols),
-        ch: ah.div_ceil(n_rows),
-        n_cols,
-        n_rows,
-        x_end: w - e,
-        y_end: h - e,
     };
     detect_adaptive(lvl, area, &cells, ini_th, min_th, scratch, cell_counts, out);
 }

@@ -102,6 +102,37 @@ pub struct CellLayout {
 }
 
 impl CellLayout {
+    /// ORB-SLAM2's detection area and cells of a `w` x `h` level: corners in
+    /// `[edge, dim - edge)`; cells sized over ORB-SLAM2's span `[edge - 3, dim - edge + 3]`,
+    /// floor(span / `cell`) of them, each ceil(span / n) wide (detection inside a cell is 3 px
+    /// in from its window).
+    /// `None` when the level is too small for any corner.
+    pub fn orb_slam2(w: usize, h: usize, edge: usize, cell: usize) -> Option<(Rect, CellLayout)> {
+        if w <= 2 * edge + 1 || h <= 2 * edge + 1 {
+            return None;
+        }
+        let area = Rect {
+            x0: edge,
+            y0: edge,
+            x1: w - edge,
+            y1: h - edge,
+        };
+        let (aw, ah) = (w - 2 * (edge - 3), h - 2 * (edge - 3));
+        let n_cols = (aw / cell).max(1);
+        let n_rows = (ah / cell).max(1);
+        let cells = CellLayout {
+            x0: edge,
+            y0: edge,
+            cw: aw.div_ceil(n_cols),
+            ch: ah.div_ceil(n_rows),
+            n_cols,
+            n_rows,
+            x_end: w - edge,
+            y_end: h - edge,
+        };
+        Some((area, cells))
+    }
+
     /// The rectangle of cell (i, j).
     pub fn cell(&self, i: usize, j: usize) -> Rect {
         Rect {
@@ -733,26 +764,7 @@ pub(crate) mod tests {
                     *v = 100 + *v / 12;
                 }
             }
-            let e = 19;
-            let area = Rect {
-                x0: e,
-                y0: e,
-                x1: w - e,
-                y1: h - e,
-            };
-            let (aw, ah) = (w - 2 * (e - 3), h - 2 * (e - 3));
-            let n_cols = (aw / 30).max(1);
-            let n_rows = (ah / 30).max(1);
-            let cells = CellLayout {
-                x0: e,
-                y0: e,
-                cw: aw.div_ceil(n_cols),
-                ch: ah.div_ceil(n_rows),
-                n_cols,
-                n_rows,
-                x_end: w - e,
-                y_end: h - e,
-            };
+            let (area, cells) = CellLayout::orb_slam2(w, h, 19, 30).expect("large enough");
             for (hi, lo) in [(20u8, 7u8), (40, 3), (7, 20), (12, 12)] {
                 let mut got = vec![Corner {
                     y: 0,

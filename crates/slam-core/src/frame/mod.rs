@@ -480,7 +480,7 @@ mod golden {
                 depth: None,
                 right: Some(Arc::new(right)),
             };
-            let cam = stereo::tests::stereo_camera();
+            let cam = Camera::euroc_rectified();
             let mut ex = OrbExtractor::new(OrbConfig::stereo());
             let f = Frame::new(0, &input, &cam, &mut ex);
             writeln!(out, "# stereo {s} n={}", f.len()).expect("write");

@@ -397,34 +397,17 @@ fn sad_curve_impl(
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use std::sync::Arc;
 
     use super::{sad_curve, sad_curve_impl, SadScratch};
     use crate::image::GrayImage;
 
-    use crate::camera::{Camera, SensorKind};
+    use crate::camera::Camera;
     use crate::feature::test_scene::TestScene;
     use crate::feature::{OrbConfig, OrbExtractor};
     use crate::frame::Frame;
     use crate::image::FrameInput;
-
-    /// EuRoC-like rectified stereo camera.
-    pub(crate) fn stereo_camera() -> Camera {
-        Camera {
-            fx: 435.2,
-            fy: 435.2,
-            cx: 367.45,
-            cy: 252.2,
-            width: 752,
-            height: 480,
-            distortion: None,
-            bf: 47.9,
-            th_depth: 35.0,
-            fps: 20.0,
-            sensor: SensorKind::Stereo,
-        }
-    }
 
     /// True disparity of the three fronto-parallel planes (horizontal bands).
     fn disparity(v: f64) -> f64 {
@@ -521,7 +504,7 @@ pub(crate) mod tests {
             depth: None,
             right: Some(Arc::new(right)),
         };
-        let cam = stereo_camera();
+        let cam = Camera::euroc_rectified();
         let mut ex = OrbExtractor::new(OrbConfig::stereo());
         let f = Frame::new(3, &input, &cam, &mut ex);
         assert_eq!((f.id, f.timestamp), (3, 1.5));
