@@ -105,5 +105,8 @@ pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Se
     if seq.frames.is_empty() {
         bail!("sequence {} has no frames", source.label());
     }
+    for note in &seq.notes {
+        eprintln!("warning: {note}");
+    }
     Ok(seq)
 }

@@ -99,14 +99,117 @@ fn unnormalised_quaternion_warns_but_evaluates() {
 }
 
 #[test]
-fn unsorted_timestamps_rejected() {
+fn unsorted_timestamps_refused_with_strict() {
     let p = tmp(
         "uns.txt",
         "1.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n",
     );
     assert_clean_failure(
-        &noisefree(&["eval", p.to_str().unwrap(), p.to_str().unwrap()]),
+        &noisefree(&["eval", p.to_str().unwrap(), p.to_str().unwrap(), "--strict"]),
         "uns.txt:3",
+    );
+}
+
+fn fr2_desk() -> Option<PathBuf> {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tum_fr2_desk");
+    d.is_dir().then_some(d)
+}
+
+/// The real TUM fr2_desk ground truth as distributed (a repeated stamp at line 10863) and an
+/// ORB-SLAM2 estimate: scored as evaluate_ate.py and evo_ape score them (figures from those
+/// tools, crates/ate-eval/tests/fixtures/expected_fr2_desk.json), with one warning line.
+#[test]
+fn real_fr2_desk_ground_truth_is_read_as_the_tools_read_it() {
+    let Some(d) = fr2_desk() else {
+        eprintln!("skipping: ../shared/data/tum_fr2_desk not present");
+        return;
+    };
+    let gt = d.join("groundtruth.txt");
+    let est = d.join("orbslam2_rgbd.txt");
+    let (gt, est) = (gt.to_str().unwrap(), est.to_str().unwrap());
+    for (extra, rmse, pairs) in [
+        (&[][..], 0.008143967169519095, 2223),
+        (
+            &["--assoc", "evo", "--max-diff", "0.01"][..],
+            0.008118977562045396,
+            2174,
+        ),
+    ] {
+        let mut args = vec!["eval", gt, est, "--json"];
+        args.extend_from_slice(extra);
+        let out = noisefree(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(
+            (v["ate"]["rmse"].as_f64().unwrap() - rmse).abs() < 1e-6,
+            "{extra:?}: {v}"
+        );
+        assert_eq!(v["ate"]["count"].as_u64().unwrap(), pairs, "{extra:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let warnings: Vec<&str> = stderr.lines().filter(|l| l.contains("warning")).collect();
+        assert_eq!(warnings.len(), 1, "one warning line: {stderr}");
+        assert!(
+            warnings[0].contains("groundtruth.txt: 1 repeated stamp (first at line 10863)"),
+            "{stderr}"
+        );
+    }
+    assert_clean_failure(
+        &noisefree(&["eval", gt, est, "--strict"]),
+        "groundtruth.txt:10863",
+    );
+}
+
+#[test]
+fn shuffled_estimate_gives_the_same_ate_with_a_warning() {
+    let lines: Vec<String> = (0..40)
+        .map(|i| format!("{}.0 {} {} 0 0 0 0 1", i, i, (i * i) % 7))
+        .collect();
+    let sorted = tmp("sorted.txt", &lines.join("\n"));
+    let mut shuffled_lines = lines.clone();
+    shuffled_lines.reverse();
+    shuffled_lines.swap(3, 17);
+    let shuffled = tmp("shuffled.txt", &shuffled_lines.join("\n"));
+    let gt_lines: Vec<String> = (0..40)
+        .map(|i| {
+            format!(
+                "{}.005 {} {} {} 0 0 0 1",
+                i,
+                i as f64 * 1.01,
+                (i * i) % 7,
+                (i % 3) as f64 * 0.01
+            )
+        })
+        .collect();
+    let gt = tmp("gt40.txt", &gt_lines.join("\n"));
+    let rmse = |est: &Path| {
+        let out = noisefree(&[
+            "eval",
+            gt.to_str().unwrap(),
+            est.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (
+            v["ate"]["rmse"].as_f64().unwrap(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (a, wa) = rmse(&sorted);
+    let (b, wb) = rmse(&shuffled);
+    assert_eq!(a, b);
+    assert!(!wa.contains("warning"), "{wa}");
+    assert!(
+        wb.contains("shuffled.txt: stamps not in time order (first at line 2), sorted"),
+        "{wb}"
     );
 }
 

@@ -3,7 +3,9 @@
 
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{self, Format};
-use ate_eval::{evaluate_ate, evaluate_rpe, AlignmentMode, AssociationMode, AteOptions, RpeDelta};
+use ate_eval::{
+    evaluate_ate, evaluate_rpe, AlignmentMode, AssociationMode, AteOptions, RpeDelta, StampPolicy,
+};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -87,6 +89,11 @@ pub struct EvalArgs {
     /// Print every statistic (and per-pose errors) as JSON instead of the human summary.
     #[arg(long)]
     pub json: bool,
+    /// Refuse files whose stamps repeat or go back in time (by default they are read as the
+    /// tool of --assoc reads them: evaluate_ate.py keeps the last line of a repeated stamp, evo
+    /// keeps every line; both sort by time), with a warning line per repaired file.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 fn resolve(arg: FormatArg, path: &std::path::Path) -> Format {
@@ -111,8 +118,17 @@ pub fn run(args: EvalArgs) -> Result<()> {
     }
     let gt_fmt = resolve(args.gt_format.unwrap_or(args.format), &args.gt);
     let est_fmt = resolve(args.est_format.unwrap_or(args.format), &args.est);
-    let gt = io::read_trajectory(&args.gt, gt_fmt, args.gt_times.as_deref())?;
-    let est = io::read_trajectory(&args.est, est_fmt, args.est_times.as_deref())?;
+    let association = match args.assoc {
+        AssocArg::Tum => AssociationMode::Tum,
+        AssocArg::Evo => AssociationMode::Evo,
+    };
+    let policy = if args.strict {
+        StampPolicy::Strict
+    } else {
+        StampPolicy::for_association(association)
+    };
+    let gt = io::read_trajectory(&args.gt, gt_fmt, args.gt_times.as_deref(), policy)?;
+    let est = io::read_trajectory(&args.est, est_fmt, args.est_times.as_deref(), policy)?;
     for w in gt.warnings.iter().chain(&est.warnings) {
         eprintln!("warning: {w}");
     }
@@ -131,10 +147,7 @@ pub fn run(args: EvalArgs) -> Result<()> {
         } else {
             AlignmentMode::Se3
         },
-        association: match args.assoc {
-            AssocArg::Tum => AssociationMode::Tum,
-            AssocArg::Evo => AssociationMode::Evo,
-        },
+        association,
     };
     let ate = evaluate_ate(&gt.trajectory, &est_traj, &opts).with_context(|| {
         format!(

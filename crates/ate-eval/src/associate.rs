@@ -20,7 +20,8 @@ pub enum AssociationMode {
 
 /// Pairs `(gt_index, est_index)`, sorted by ground-truth index, of stamps that belong together.
 /// `offset` (seconds) is added to every estimate stamp before comparison. Both stamp lists must
-/// be sorted ascending (the readers guarantee it).
+/// be in non-decreasing order (the readers guarantee it); repeated stamps are paired as the
+/// reproduced tool pairs them.
 pub fn associate(
     gt: &[f64],
     est: &[f64],
@@ -66,40 +67,47 @@ fn associate_tum(gt: &[f64], est: &[f64], max_difference: f64, offset: f64) -> V
     pairs
 }
 
-fn nearest(sorted: &[f64], t: f64) -> Option<usize> {
-    if sorted.is_empty() {
+/// The nearest stamp of `sorted` to `t` within `max_difference`, chosen as evo's
+/// `matching_time_indices` chooses on sorted stamps: the candidate after every stamp <= t wins
+/// only when strictly closer than the one before it, so of a repeated stamp the last copy is
+/// taken when approached from above (or hit exactly) and the first when approached from below.
+fn evo_nearest(sorted: &[f64], t: f64, max_difference: f64) -> Option<usize> {
+    let n = sorted.len();
+    if n == 0 || t < sorted[0] - max_difference || t > sorted[n - 1] + max_difference {
         return None;
     }
-    let k = sorted.partition_point(|&s| s < t);
-    match (k.checked_sub(1), (k < sorted.len()).then_some(k)) {
-        (Some(a), Some(b)) => Some(if (t - sorted[a]).abs() <= (sorted[b] - t).abs() {
-            a
-        } else {
-            b
-        }),
-        (Some(a), None) => Some(a),
-        (None, Some(b)) => Some(b),
-        (None, None) => None,
+    let idx = sorted.partition_point(|&s| s <= t).min(n - 1);
+    let above = sorted[idx] - t;
+    let below = if idx > 0 {
+        t - sorted[idx - 1]
+    } else {
+        f64::INFINITY
+    };
+    if above <= max_difference && above < below {
+        Some(idx)
+    } else if below <= max_difference && below <= above {
+        Some(idx - 1)
+    } else {
+        None
     }
 }
 
 fn associate_evo(gt: &[f64], est: &[f64], max_difference: f64, offset: f64) -> Vec<(usize, usize)> {
-    let est_shifted: Vec<f64> = est.iter().map(|t| t + offset).collect();
+    // evo searches from the trajectory with fewer poses (the estimate on a tie) into the other,
+    // and applies the offset to the one searched into.
     let mut pairs = Vec::new();
-    if est_shifted.len() <= gt.len() {
-        for (j, &t) in est_shifted.iter().enumerate() {
-            if let Some(i) = nearest(gt, t) {
-                if (gt[i] - t).abs() <= max_difference {
-                    pairs.push((i, j));
-                }
+    if est.len() <= gt.len() {
+        let gt_shifted: Vec<f64> = gt.iter().map(|t| t - offset).collect();
+        for (j, &t) in est.iter().enumerate() {
+            if let Some(i) = evo_nearest(&gt_shifted, t, max_difference) {
+                pairs.push((i, j));
             }
         }
     } else {
+        let est_shifted: Vec<f64> = est.iter().map(|t| t + offset).collect();
         for (i, &t) in gt.iter().enumerate() {
-            if let Some(j) = nearest(&est_shifted, t) {
-                if (est_shifted[j] - t).abs() <= max_difference {
-                    pairs.push((i, j));
-                }
+            if let Some(j) = evo_nearest(&est_shifted, t, max_difference) {
+                pairs.push((i, j));
             }
         }
     }
@@ -207,5 +215,35 @@ mod tests {
                 expected
             );
         }
+    }
+
+    #[test]
+    fn evo_resolves_repeated_stamps_as_evo_does() {
+        // gt (longer, searched into) repeats 1.0 at indices 1 and 2. From above or exactly, evo's
+        // binary search lands on the last copy; from below on the first.
+        let gt = [0.0, 1.0, 1.0, 2.0, 3.0];
+        assert_eq!(
+            associate(&gt, &[1.0, 2.5], 0.6, 0.0, AssociationMode::Evo),
+            vec![(2, 0), (3, 1)]
+        );
+        assert_eq!(
+            associate(&gt, &[1.004], 0.01, 0.0, AssociationMode::Evo),
+            vec![(2, 0)]
+        );
+        assert_eq!(
+            associate(&gt, &[0.996], 0.01, 0.0, AssociationMode::Evo),
+            vec![(1, 0)]
+        );
+        // A repeat in the shorter trajectory is kept: both of its lines are paired.
+        assert_eq!(
+            associate(
+                &[0.0, 1.0, 2.0],
+                &[1.0, 1.0],
+                0.01,
+                0.0,
+                AssociationMode::Evo
+            ),
+            vec![(1, 0), (1, 1)]
+        );
     }
 }

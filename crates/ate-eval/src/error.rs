@@ -24,8 +24,9 @@ pub enum Error {
         /// What is wrong with the line.
         message: String,
     },
-    /// Timestamps must strictly increase down the file.
-    #[error("{path}:{line}: timestamp {stamp} is not after the previous one ({previous}); trajectories must be sorted by time without duplicates")]
+    /// Timestamps do not strictly increase down the file, and the reader was asked to refuse
+    /// that ([`crate::StampPolicy::Strict`]).
+    #[error("{path}:{line}: timestamp {stamp} is not after the previous one ({previous}); with --strict, trajectories must be sorted by time without duplicates")]
     Unsorted {
         /// The file.
         path: PathBuf,

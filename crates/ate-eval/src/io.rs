@@ -5,11 +5,13 @@
 //! - KITTI: 12 numbers a line (row-major 3x4 [R | t]), stamps from a times file or the index.
 //!
 //! Readers check every line: field count, finite numbers, rotation validity (a quaternion off
-//! unit length is normalised with a warning, one near zero is rejected), strictly increasing
-//! stamps. Writers go through a temporary file and a rename, so a crash never leaves a file that
+//! unit length is normalised with a warning, one near zero is rejected). Repeated and
+//! out-of-order stamps are resolved as the community tools resolve them, with one warning per
+//! file, or refused under [`StampPolicy::Strict`] (see [`crate::stamps`]). Writers go through a temporary file and a rename, so a crash never leaves a file that
 //! looks complete.
 
 use crate::error::{Error, Result};
+use crate::stamps::{self, Row, StampPolicy};
 use crate::trajectory::Trajectory;
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion};
 use std::fmt::Write as _;
@@ -37,20 +39,24 @@ impl Format {
     }
 }
 
-/// A note about an input that was accepted after a repair (e.g. a quaternion normalised).
+/// A note about an input that was accepted after a repair (e.g. a quaternion normalised, or
+/// repeated stamps resolved).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Warning {
     /// The file.
     pub path: PathBuf,
-    /// 1-based line number.
-    pub line: usize,
+    /// 1-based line number, when the note is about one line (not the whole file).
+    pub line: Option<usize>,
     /// What was repaired.
     pub message: String,
 }
 
 impl std::fmt::Display for Warning {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}:{}: {}", self.path.display(), self.line, self.message)
+        match self.line {
+            Some(line) => write!(f, "{}:{}: {}", self.path.display(), line, self.message),
+            None => write!(f, "{}: {}", self.path.display(), self.message),
+        }
     }
 }
 
@@ -68,10 +74,21 @@ const QUAT_NORM_TOLERANCE: f64 = 1e-3;
 /// Norm below which a quaternion carries no rotation and the line is rejected.
 const QUAT_MIN_NORM: f64 = 1e-6;
 
+/// The file's text; a file that is not UTF-8 text (binary junk, an image passed by mistake) is
+/// a parse error naming the line where the text stops being text.
 fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let good = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..good].iter().filter(|&&b| b == b'\n').count() + 1;
+        Error::Parse {
+            path: path.to_path_buf(),
+            line,
+            message: format!("not a text file (invalid UTF-8 at byte {good})"),
+        }
     })
 }
 
@@ -124,7 +141,7 @@ impl LineCtx<'_> {
         if (n - 1.0).abs() > QUAT_NORM_TOLERANCE {
             warnings.push(Warning {
                 path: self.path.to_path_buf(),
-                line: self.line,
+                line: Some(self.line),
                 message: format!("quaternion norm {n:.6} is not 1; normalised"),
             });
         }
@@ -132,50 +149,34 @@ impl LineCtx<'_> {
     }
 }
 
-struct StampChecker<'a> {
-    path: &'a Path,
-    previous: Option<f64>,
-}
-
-impl StampChecker<'_> {
-    fn check(&mut self, line: usize, stamp: f64) -> Result<()> {
-        if let Some(prev) = self.previous {
-            if stamp <= prev {
-                return Err(Error::Unsorted {
-                    path: self.path.to_path_buf(),
-                    line,
-                    stamp,
-                    previous: prev,
-                });
-            }
-        }
-        self.previous = Some(stamp);
-        Ok(())
-    }
-}
-
-/// The result of a reader: an error for a file without any pose, else the poses and repairs.
-fn loaded(path: &Path, trajectory: Trajectory, warnings: Vec<Warning>) -> Result<Loaded> {
-    if trajectory.is_empty() {
+/// The result of a reader: an error for a file without any pose, else the rows ordered under
+/// `policy` (stamps of `stamp_path`) with the repairs made.
+fn loaded(
+    path: &Path,
+    stamp_path: &Path,
+    rows: Vec<Row>,
+    mut warnings: Vec<Warning>,
+    policy: StampPolicy,
+) -> Result<Loaded> {
+    if rows.is_empty() {
         return Err(Error::Empty {
             path: path.to_path_buf(),
         });
     }
+    let (trajectory, note) = stamps::arrange(stamp_path, rows, policy)?;
+    warnings.extend(note);
     Ok(Loaded {
         trajectory,
         warnings,
     })
 }
 
-/// Reads a TUM trajectory, returning the repairs made as warnings.
-pub fn read_tum_loaded(path: &Path) -> Result<Loaded> {
+/// Reads a TUM trajectory, ordering its stamps under `policy` and returning the repairs made
+/// as warnings.
+pub fn read_tum_loaded(path: &Path, policy: StampPolicy) -> Result<Loaded> {
     let text = read_text(path)?;
-    let mut traj = Trajectory::new();
+    let mut rows = Vec::new();
     let mut warnings = Vec::new();
-    let mut stamps = StampChecker {
-        path,
-        previous: None,
-    };
     for (i, raw) in text.lines().enumerate() {
         let ctx = LineCtx { path, line: i + 1 };
         let content = raw.split('#').next().unwrap_or("").trim();
@@ -194,29 +195,27 @@ pub fn read_tum_loaded(path: &Path) -> Result<Loaded> {
         }
         let v = ctx.numbers(&fields)?;
         let q = ctx.quaternion(v[7], v[4], v[5], v[6], &mut warnings)?;
-        stamps.check(i + 1, v[0])?;
-        traj.push(
-            v[0],
-            Isometry3::from_parts(Translation3::new(v[1], v[2], v[3]), q),
-        );
+        rows.push(Row {
+            line: i + 1,
+            stamp: v[0],
+            pose: Isometry3::from_parts(Translation3::new(v[1], v[2], v[3]), q),
+        });
     }
-    loaded(path, traj, warnings)
+    loaded(path, path, rows, warnings, policy)
 }
 
-/// Reads a TUM trajectory (`timestamp tx ty tz qx qy qz qw`).
+/// Reads a TUM trajectory (`timestamp tx ty tz qx qy qz qw`) as `evaluate_ate.py` does
+/// ([`StampPolicy::LastWins`]).
 pub fn read_tum(path: &Path) -> Result<Trajectory> {
-    read_tum_loaded(path).map(|l| l.trajectory)
+    read_tum_loaded(path, StampPolicy::default()).map(|l| l.trajectory)
 }
 
-/// Reads an EuRoC ground-truth CSV, returning repairs as warnings. Stamps become seconds.
-pub fn read_euroc_loaded(path: &Path) -> Result<Loaded> {
+/// Reads an EuRoC ground-truth CSV, ordering its stamps under `policy` and returning repairs
+/// as warnings. Stamps become seconds.
+pub fn read_euroc_loaded(path: &Path, policy: StampPolicy) -> Result<Loaded> {
     let text = read_text(path)?;
-    let mut traj = Trajectory::new();
+    let mut rows = Vec::new();
     let mut warnings = Vec::new();
-    let mut stamps = StampChecker {
-        path,
-        previous: None,
-    };
     for (i, raw) in text.lines().enumerate() {
         let ctx = LineCtx { path, line: i + 1 };
         let content = raw.trim();
@@ -239,18 +238,19 @@ pub fn read_euroc_loaded(path: &Path) -> Result<Loaded> {
         let v = ctx.numbers(&fields[1..8])?;
         let q = ctx.quaternion(v[3], v[4], v[5], v[6], &mut warnings)?;
         let stamp = ns_to_seconds(ns);
-        stamps.check(i + 1, stamp)?;
-        traj.push(
+        rows.push(Row {
+            line: i + 1,
             stamp,
-            Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), q),
-        );
+            pose: Isometry3::from_parts(Translation3::new(v[0], v[1], v[2]), q),
+        });
     }
-    loaded(path, traj, warnings)
+    loaded(path, path, rows, warnings, policy)
 }
 
-/// Reads an EuRoC ground-truth CSV (`state_groundtruth_estimate0/data.csv`).
+/// Reads an EuRoC ground-truth CSV (`state_groundtruth_estimate0/data.csv`) as
+/// `evaluate_ate.py` would ([`StampPolicy::LastWins`]).
 pub fn read_euroc(path: &Path) -> Result<Trajectory> {
-    read_euroc_loaded(path).map(|l| l.trajectory)
+    read_euroc_loaded(path, StampPolicy::default()).map(|l| l.trajectory)
 }
 
 /// Nanoseconds to seconds without losing the sub-microsecond digits of 1e18-scale stamps
@@ -262,8 +262,9 @@ fn ns_to_seconds(ns: i128) -> f64 {
 }
 
 /// Reads a KITTI pose file (12 numbers a line, row-major [R | t]). Stamps come from `times`
-/// (one number a line, KITTI's `times.txt`) or, without it, are the frame indices 0, 1, 2...
-pub fn read_kitti_loaded(path: &Path, times: Option<&Path>) -> Result<Loaded> {
+/// (one number a line, KITTI's `times.txt`; ordered under `policy`, warnings name that file)
+/// or, without it, are the frame indices 0, 1, 2...
+pub fn read_kitti_loaded(path: &Path, times: Option<&Path>, policy: StampPolicy) -> Result<Loaded> {
     let text = read_text(path)?;
     let mut poses = Vec::new();
     let mut warnings = Vec::new();
@@ -292,7 +293,7 @@ pub fn read_kitti_loaded(path: &Path, times: Option<&Path>) -> Result<Loaded> {
         if orth_err > 1e-3 {
             warnings.push(Warning {
                 path: path.to_path_buf(),
-                line: i + 1,
+                line: Some(i + 1),
                 message: format!(
                     "rotation block is not orthonormal (error {orth_err:.2e}); re-orthonormalised"
                 ),
@@ -342,33 +343,31 @@ pub fn read_kitti_loaded(path: &Path, times: Option<&Path>) -> Result<Loaded> {
             out
         }
     };
-    let times_path = times.unwrap_or(path);
-    let mut checker = StampChecker {
-        path: times_path,
-        previous: None,
-    };
-    let mut traj = Trajectory::new();
-    for ((line, stamp), (_, pose)) in stamps.into_iter().zip(poses) {
-        checker.check(line, stamp)?;
-        traj.push(stamp, pose);
-    }
-    Ok(Loaded {
-        trajectory: traj,
-        warnings,
-    })
+    let rows = stamps
+        .into_iter()
+        .zip(poses)
+        .map(|((line, stamp), (_, pose))| Row { line, stamp, pose })
+        .collect();
+    loaded(path, times.unwrap_or(path), rows, warnings, policy)
 }
 
-/// Reads a KITTI pose file; see [`read_kitti_loaded`].
+/// Reads a KITTI pose file as `evaluate_ate.py` would; see [`read_kitti_loaded`].
 pub fn read_kitti(path: &Path, times: Option<&Path>) -> Result<Trajectory> {
-    read_kitti_loaded(path, times).map(|l| l.trajectory)
+    read_kitti_loaded(path, times, StampPolicy::default()).map(|l| l.trajectory)
 }
 
-/// Reads a trajectory in the given format (KITTI stamps from `kitti_times` when given).
-pub fn read_trajectory(path: &Path, format: Format, kitti_times: Option<&Path>) -> Result<Loaded> {
+/// Reads a trajectory in the given format (KITTI stamps from `kitti_times` when given),
+/// ordering its stamps under `policy`.
+pub fn read_trajectory(
+    path: &Path,
+    format: Format,
+    kitti_times: Option<&Path>,
+    policy: StampPolicy,
+) -> Result<Loaded> {
     match format {
-        Format::Tum => read_tum_loaded(path),
-        Format::Euroc => read_euroc_loaded(path),
-        Format::Kitti => read_kitti_loaded(path, kitti_times),
+        Format::Tum => read_tum_loaded(path, policy),
+        Format::Euroc => read_euroc_loaded(path, policy),
+        Format::Kitti => read_kitti_loaded(path, kitti_times, policy),
     }
 }
 
@@ -551,9 +550,9 @@ mod tests {
     #[test]
     fn tum_quaternion_normalised_with_warning_or_rejected() {
         let p = tmp_file("q.txt", "1.0 0 0 0 0 0 0 2\n2.0 0 0 0 0 0 0 1\n");
-        let l = read_tum_loaded(&p).unwrap();
+        let l = read_tum_loaded(&p, StampPolicy::default()).unwrap();
         assert_eq!(l.warnings.len(), 1);
-        assert_eq!(l.warnings[0].line, 1);
+        assert_eq!(l.warnings[0].line, Some(1));
         assert!((l.trajectory.poses[0].rotation.angle()).abs() < 1e-12);
         let p = tmp_file("q0.txt", "1.0 0 0 0 0 0 0 1e-9\n");
         let (line, msg) = parse_err(read_tum(&p).unwrap_err());
@@ -562,17 +561,93 @@ mod tests {
     }
 
     #[test]
-    fn tum_unsorted_and_duplicate_rejected() {
+    fn tum_unsorted_and_duplicate_rejected_when_strict() {
+        let strict = |p: &Path| read_tum_loaded(p, StampPolicy::Strict).unwrap_err();
         let p = tmp_file("uns.txt", "2.0 0 0 0 0 0 0 1\n1.0 0 0 0 0 0 0 1\n");
-        match read_tum(&p).unwrap_err() {
+        match strict(&p) {
             Error::Unsorted { line, .. } => assert_eq!(line, 2),
             e => panic!("{e:?}"),
         }
         let p = tmp_file("dup.txt", "1.0 0 0 0 0 0 0 1\n\n1.0 0 0 0 0 0 0 1\n");
-        match read_tum(&p).unwrap_err() {
+        let e = strict(&p);
+        assert!(e.to_string().contains("dup.txt:3"), "{e}");
+    }
+
+    #[test]
+    fn tum_unsorted_and_duplicate_read_as_the_tools_do() {
+        let p = tmp_file(
+            "tol.txt",
+            "2.0 2 0 0 0 0 0 1\n1.0 1 0 0 0 0 0 1\n\n2.0 3 0 0 0 0 0 1\n",
+        );
+        let l = read_tum_loaded(&p, StampPolicy::LastWins).unwrap();
+        assert_eq!(l.trajectory.stamps, vec![1.0, 2.0]);
+        assert_eq!(l.trajectory.poses[1].translation.vector.x, 3.0);
+        assert_eq!(l.warnings.len(), 1, "one warning line per file");
+        let w = l.warnings[0].to_string();
+        assert!(w.starts_with(&format!("{}: ", p.display())), "{w}");
+        assert!(
+            w.contains("not in time order (first at line 2), sorted"),
+            "{w}"
+        );
+        assert!(w.contains("1 repeated stamp (first at line 4)"), "{w}");
+        let l = read_tum_loaded(&p, StampPolicy::KeepAll).unwrap();
+        assert_eq!(l.trajectory.stamps, vec![1.0, 2.0, 2.0]);
+        let x: Vec<f64> = l
+            .trajectory
+            .poses
+            .iter()
+            .map(|q| q.translation.vector.x)
+            .collect();
+        assert_eq!(x, vec![1.0, 2.0, 3.0]);
+    }
+
+    #[test]
+    fn euroc_and_kitti_times_tolerate_repeats_and_disorder() {
+        let p = tmp_file(
+            "rep.csv",
+            "#timestamp [ns], x, y, z, qw, qx, qy, qz\n\
+             2000000000,2,0,0,1,0,0,0\n\
+             1000000000,1,0,0,1,0,0,0\n\
+             2000000000,3,0,0,1,0,0,0\n",
+        );
+        let l = read_euroc_loaded(&p, StampPolicy::LastWins).unwrap();
+        assert_eq!(l.trajectory.stamps, vec![1.0, 2.0]);
+        assert_eq!(l.trajectory.poses[1].translation.vector.x, 3.0);
+        assert_eq!(l.warnings.len(), 1);
+        match read_euroc_loaded(&p, StampPolicy::Strict).unwrap_err() {
             Error::Unsorted { line, .. } => assert_eq!(line, 3),
             e => panic!("{e:?}"),
         }
+        let k = tmp_file(
+            "kt.txt",
+            "1 0 0 1 0 1 0 0 0 0 1 0\n1 0 0 2 0 1 0 0 0 0 1 0\n1 0 0 3 0 1 0 0 0 0 1 0\n",
+        );
+        let times = tmp_file("kt_times.txt", "0.2\n0.1\n0.2\n");
+        let l = read_kitti_loaded(&k, Some(&times), StampPolicy::LastWins).unwrap();
+        assert_eq!(l.trajectory.stamps, vec![0.1, 0.2]);
+        assert_eq!(l.trajectory.poses[1].translation.vector.x, 3.0);
+        let w = l.warnings[0].to_string();
+        assert!(
+            w.contains("kt_times.txt"),
+            "the warning names the times file: {w}"
+        );
+        match read_kitti_loaded(&k, Some(&times), StampPolicy::Strict).unwrap_err() {
+            Error::Unsorted { path, line, .. } => {
+                assert_eq!(line, 2);
+                assert!(path.ends_with("kt_times.txt"));
+            }
+            e => panic!("{e:?}"),
+        }
+    }
+
+    #[test]
+    fn binary_junk_names_file_and_line() {
+        let dir = std::env::temp_dir().join(format!("ate-eval-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("junk.txt");
+        std::fs::write(&p, b"1.0 0 0 0 0 0 0 1\n\x89PNG\r\n\x1a\n\xff\xfe").unwrap();
+        let e = read_tum(&p).unwrap_err();
+        assert!(e.to_string().contains("junk.txt:2: not a text file"), "{e}");
     }
 
     #[test]
@@ -652,7 +727,9 @@ mod tests {
         for fmt in [Format::Tum, Format::Euroc, Format::Kitti] {
             let p = tmp_file(&format!("rt_{fmt:?}.txt"), "");
             write_trajectory(&p, &t, fmt).unwrap();
-            let back = read_trajectory(&p, fmt, None).unwrap().trajectory;
+            let back = read_trajectory(&p, fmt, None, StampPolicy::Strict)
+                .unwrap()
+                .trajectory;
             assert_eq!(back.len(), t.len());
             for (a, b) in back.poses.iter().zip(&t.poses) {
                 assert!((a.translation.vector - b.translation.vector).norm() < 1e-8);

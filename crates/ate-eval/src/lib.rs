@@ -4,6 +4,7 @@
 //!
 //! - [`trajectory`]: the [`Trajectory`] type (timestamps + SE3 poses) and frame conversions;
 //! - [`io`]: TUM, EuRoC ground-truth CSV and KITTI readers / writers with line-precise errors;
+//! - [`stamps`]: repeated and out-of-order stamps, resolved as each community tool does;
 //! - [`associate`]: nearest-timestamp association (TUM and evo conventions);
 //! - [`align`]: closed-form Umeyama alignment (SE3, Sim3);
 //! - [`ate`], [`rpe`]: the error statistics.
@@ -14,6 +15,7 @@ pub mod ate;
 pub mod error;
 pub mod io;
 pub mod rpe;
+pub mod stamps;
 pub mod stats;
 pub mod trajectory;
 
@@ -22,5 +24,6 @@ pub use associate::{associate, AssociationMode};
 pub use ate::{evaluate_ate, AteOptions, AteResult};
 pub use error::Error;
 pub use rpe::{evaluate_rpe, RpeDelta, RpeResult};
+pub use stamps::StampPolicy;
 pub use stats::ErrorStats;
 pub use trajectory::Trajectory;

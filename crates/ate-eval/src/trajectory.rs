@@ -1,12 +1,13 @@
-//! The trajectory type: strictly increasing timestamps with a pose each, in the TUM convention
+//! The trajectory type: timestamps in time order with a pose each, in the TUM convention
 //! (each pose maps the sensor frame into the world frame, T_world_sensor).
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-/// A timed sequence of poses T_world_sensor. Stamps are seconds and strictly increase.
+/// A timed sequence of poses T_world_sensor. Stamps are seconds in non-decreasing order; they
+/// repeat only where a file was read keeping every line ([`crate::StampPolicy::KeepAll`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trajectory {
-    /// Timestamps in seconds, strictly increasing.
+    /// Timestamps in seconds, non-decreasing.
     pub stamps: Vec<f64>,
     /// One pose per stamp, T_world_sensor.
     pub poses: Vec<Isometry3<f64>>,

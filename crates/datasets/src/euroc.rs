@@ -296,13 +296,13 @@ pub fn load_euroc_with(dir: &Path, opts: &EurocOptions) -> Result<Sequence, Data
         .into_iter()
         .collect::<Result<Vec<_>, _>>()?;
     let gt_path = mav0.join("state_groundtruth_estimate0/data.csv");
+    let mut notes = Vec::new();
     let groundtruth = if gt_path.is_file() {
-        Some(
-            ate_eval::io::read_euroc(&gt_path).map_err(|e| DatasetError::GroundTruth {
-                path: gt_path.clone(),
-                msg: e.to_string(),
-            })?,
-        )
+        Some(crate::tum::read_groundtruth(
+            &gt_path,
+            ate_eval::io::Format::Euroc,
+            &mut notes,
+        )?)
     } else {
         None
     };
@@ -314,6 +314,7 @@ pub fn load_euroc_with(dir: &Path, opts: &EurocOptions) -> Result<Sequence, Data
         groundtruth,
         t_bs: Some(rect.t_b_left),
         format: Format::EurocStereo,
+        notes,
     })
 }
 

@@ -40,6 +40,9 @@ pub struct Sequence {
     pub t_bs: Option<Isometry3<f64>>,
     /// The layout it came from.
     pub format: Format,
+    /// What was repaired while reading the sequence's files (e.g. a ground truth with
+    /// repeated stamps, read as evaluate_ate.py reads it), one line each, for the user to see.
+    pub notes: Vec<String>,
 }
 
 impl Sequence {

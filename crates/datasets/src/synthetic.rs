@@ -42,5 +42,6 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
         groundtruth: Some(ate_eval::Trajectory { stamps, poses }),
         t_bs: None,
         format,
+        notes: Vec::new(),
     }
 }

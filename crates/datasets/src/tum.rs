@@ -264,8 +264,13 @@ pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetE
         .collect::<Result<Vec<_>, _>>()?;
 
     let gt_path = dir.join("groundtruth.txt");
+    let mut notes = Vec::new();
     let groundtruth = if gt_path.is_file() {
-        Some(read_tum_groundtruth(&gt_path)?)
+        Some(read_groundtruth(
+            &gt_path,
+            ate_eval::io::Format::Tum,
+            &mut notes,
+        )?)
     } else {
         None
     };
@@ -276,14 +281,24 @@ pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetE
         groundtruth,
         t_bs: None,
         format: Format::TumRgbd,
+        notes,
     })
 }
 
-pub(crate) fn read_tum_groundtruth(path: &Path) -> Result<ate_eval::Trajectory, DatasetError> {
-    ate_eval::io::read_tum(path).map_err(|e| DatasetError::GroundTruth {
-        path: path.to_path_buf(),
-        msg: e.to_string(),
-    })
+/// Reads a ground-truth file as evaluate_ate.py does (repeated stamps: the last line wins; out
+/// of order: sorted), adding what was repaired to `notes`.
+pub(crate) fn read_groundtruth(
+    path: &Path,
+    format: ate_eval::io::Format,
+    notes: &mut Vec<String>,
+) -> Result<ate_eval::Trajectory, DatasetError> {
+    let loaded = ate_eval::io::read_trajectory(path, format, None, ate_eval::StampPolicy::LastWins)
+        .map_err(|e| DatasetError::GroundTruth {
+            path: path.to_path_buf(),
+            msg: e.to_string(),
+        })?;
+    notes.extend(loaded.warnings.iter().map(|w| w.to_string()));
+    Ok(loaded.trajectory)
 }
 
 pub(crate) fn check_size(

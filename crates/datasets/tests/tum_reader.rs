@@ -32,6 +32,35 @@ fn reads_frames_depth_and_groundtruth() {
     assert_eq!(again.frames[2].image, seq.frames[2].image);
 }
 
+/// TUM's motion-capture ground truth repeats a stamp now and then (fr2_desk, line 10863): the
+/// folder loads, the ground truth is read as evaluate_ate.py reads it (last line of a repeated
+/// stamp wins), and the sequence carries one note naming the file and line.
+#[test]
+fn groundtruth_with_repeated_stamp_loads_with_a_note() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("seq");
+    write_tum(&dir, 3, 16, 12);
+    let gt = dir.join("groundtruth.txt");
+    let mut text = std::fs::read_to_string(&gt).unwrap();
+    let last = text.lines().rfind(|l| !l.starts_with('#')).unwrap();
+    let stamp = last.split_whitespace().next().unwrap().to_string();
+    text.push_str(&format!("{stamp} 9 9 9 0 0 0 1\n"));
+    std::fs::write(&gt, &text).unwrap();
+    let line = text.lines().count();
+    let seq = load_tum(&dir, Some(small_camera(16, 12))).unwrap();
+    let g = seq.groundtruth.as_ref().unwrap();
+    assert_eq!(g.len(), 3);
+    assert_eq!(g.poses[2].translation.vector.x, 9.0);
+    assert_eq!(seq.notes.len(), 1, "{:?}", seq.notes);
+    assert!(
+        seq.notes[0].contains(&format!(
+            "groundtruth.txt: 1 repeated stamp (first at line {line})"
+        )),
+        "{:?}",
+        seq.notes
+    );
+}
+
 #[test]
 fn depth_factor_and_association_file_are_honoured() {
     let tmp = tempfile::tempdir().unwrap();
