@@ -6,6 +6,7 @@ mod analysis;
 mod commands;
 mod config_file;
 mod figures;
+mod regress;
 mod runner;
 mod select;
 mod sweep;
@@ -41,6 +42,9 @@ enum Command {
     Fetch(commands::fetch::FetchArgs),
     /// Detect ORB features on an image and draw them into a PNG.
     Features(commands::features::FeaturesArgs),
+    /// The regression suite: short synthetic sequences x the four configurations against the
+    /// golden figures (tests/golden/regression.toml); `--update` rewrites them.
+    Regress(commands::regress::RegressArgs),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +58,7 @@ fn main() -> ExitCode {
         Command::Synth(a) => commands::synth::run(a),
         Command::Fetch(a) => commands::fetch::run(a),
         Command::Features(a) => commands::features::run(a),
+        Command::Regress(a) => commands::regress::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,190 @@
+//! The cases of the regression suite and the figures a run of one produces.
+
+use crate::runner::RunOutcome;
+use crate::sweep::plan::ConfigKind;
+use serde::{Deserialize, Serialize};
+
+/// One synthetic sequence of the suite: which path through the system it exercises.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SuiteSequence {
+    /// Synthetic preset (datasets.toml / `synth --preset`).
+    pub preset: &'static str,
+    /// Camera trajectory overriding the preset's (`synth --trajectory`), if any.
+    pub trajectory: Option<&'static str>,
+    /// Frames rendered and tracked.
+    pub frames: usize,
+    /// Seed of the sequence's realization (scene, textures, noise).
+    pub synth_seed: u64,
+    /// What the sequence is there to exercise.
+    pub exercises: &'static str,
+}
+
+impl SuiteSequence {
+    /// The preset, with the trajectory when it overrides the preset's: `stereo-spin`.
+    pub fn label(&self) -> String {
+        match self.trajectory {
+            Some(t) => format!("{}-{t}", self.preset),
+            None => self.preset.to_string(),
+        }
+    }
+
+    /// Renders the sequence (deterministic: preset, trajectory and seed fix every pixel).
+    pub fn render(&self) -> anyhow::Result<datasets::Sequence> {
+        let mut config = synth::SynthConfig::preset(self.preset)?;
+        if let Some(t) = self.trajectory {
+            config.trajectory = synth::Trajectory::from_name(t)?;
+        }
+        let generator = synth::Generator::try_new(config, self.synth_seed)?;
+        let mut seq = datasets::from_synth(&generator, self.frames);
+        seq.name = self.label();
+        Ok(seq)
+    }
+}
+
+/// The suite's sequences; every one runs under each of the four configurations with run seed
+/// [`SUITE_SEED`]. Short enough that rendering and tracking all of them takes about a minute
+/// on two cores in the tests' optimised dev profile.
+pub const SUITE: [SuiteSequence; 4] = [
+    SuiteSequence {
+        preset: "kinect",
+        trajectory: None,
+        frames: 150,
+        synth_seed: 0,
+        exercises: "RGB-D with the Kinect depth-noise model",
+    },
+    SuiteSequence {
+        preset: "stereo",
+        trajectory: Some("spin"),
+        frames: 200,
+        synth_seed: 0,
+        exercises: "rectified stereo (EuRoC-like pair) turning on the spot: stereo matching, \
+                    keyframes and local BA from stereo points",
+    },
+    SuiteSequence {
+        preset: "walking",
+        trajectory: None,
+        frames: 150,
+        synth_seed: 0,
+        exercises: "moving people: outliers, MC-OR's rejections",
+    },
+    SuiteSequence {
+        preset: "occluded",
+        trajectory: None,
+        frames: 180,
+        synth_seed: 0,
+        exercises: "tracking lost behind a covered lens (frames 120-149), relocalization",
+    },
+];
+
+/// Run seed of every case (reaches relocalization's RANSAC).
+pub const SUITE_SEED: u64 = 0;
+
+/// One case: a suite sequence under one configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Case {
+    /// The sequence.
+    pub sequence: SuiteSequence,
+    /// The configuration (paper column).
+    pub kind: ConfigKind,
+}
+
+impl Case {
+    /// `preset[-trajectory]/config`, the case's name in the golden file and the table.
+    pub fn name(&self) -> String {
+        format!("{}/{}", self.sequence.label(), self.kind.name())
+    }
+}
+
+/// Every case of the suite, in file order.
+pub fn all_cases() -> Vec<Case> {
+    SUITE
+        .iter()
+        .flat_map(|&sequence| {
+            ConfigKind::ALL
+                .iter()
+                .map(move |&kind| Case { sequence, kind })
+        })
+        .collect()
+}
+
+/// What one run of a case measured: the figures the golden file keeps.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Figures {
+    /// ATE RMSE in metres; absent when none could be computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ate_m: Option<f64>,
+    /// Frames with a pose.
+    pub tracked: usize,
+    /// Keyframes in the final map.
+    pub keyframes: usize,
+    /// Map points in the final map.
+    pub map_points: usize,
+    /// Frames on which tracking was recovered by relocalization.
+    pub relocalizations: usize,
+    /// FNV-1a 64 of the trajectory's bits (stamps and poses): any change of behaviour, however
+    /// small, changes it.
+    pub hash: String,
+}
+
+impl Figures {
+    /// The figures of a finished run.
+    pub fn of(outcome: &RunOutcome) -> Figures {
+        Figures {
+            ate_m: outcome.ate_rmse(),
+            tracked: outcome.tracked,
+            keyframes: outcome.keyframes,
+            map_points: outcome.map_points,
+            relocalizations: outcome.stats.iter().filter(|s| s.relocalized).count(),
+            hash: trajectory_hash(&outcome.trajectory),
+        }
+    }
+}
+
+/// FNV-1a 64 over the exact bits of every stamp and pose (translation, then the quaternion's
+/// x, y, z, w), as 16 hex digits.
+pub fn trajectory_hash(t: &ate_eval::Trajectory) -> String {
+    const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+    let mut h = OFFSET;
+    let mut eat = |v: f64| {
+        for b in v.to_bits().to_le_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(PRIME);
+        }
+    };
+    for (s, p) in t.stamps.iter().zip(&t.poses) {
+        eat(*s);
+        let v = p.translation.vector;
+        let q = p.rotation.coords;
+        for x in [v.x, v.y, v.z, q.x, q.y, q.z, q.w] {
+            eat(x);
+        }
+    }
+    format!("{h:016x}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Isometry3;
+
+    #[test]
+    fn suite_covers_every_configuration_of_every_sequence_once() {
+        let cases = all_cases();
+        assert_eq!(cases.len(), SUITE.len() * 4);
+        let mut names: Vec<String> = cases.iter().map(Case::name).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), cases.len());
+    }
+
+    #[test]
+    fn hash_sees_a_one_bit_change() {
+        let mut t = ate_eval::Trajectory::new();
+        t.push(1.0, Isometry3::translation(0.1, 0.2, 0.3));
+        let a = trajectory_hash(&t);
+        t.poses[0].translation.vector.y = f64::from_bits(0.2f64.to_bits() + 1);
+        assert_ne!(a, trajectory_hash(&t));
+        assert_eq!(a.len(), 16);
+    }
+}
