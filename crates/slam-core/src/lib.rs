@@ -11,6 +11,7 @@
 //! - [`data`]: the map (keyframes, map points, covisibility) in arenas with typed ids;
 //! - [`matching`]: projection, stereo and fuse searches;
 //! - [`module`]: tracking, local mapping, relocalization;
+//! - [`place`]: place recognition (vocabulary, BoW vectors, keyframe database, training);
 //! - [`solve`]: triangulation, absolute orientation, pose RANSAC;
 //! - [`system`]: the synchronous `System` tying them together.
 
@@ -23,6 +24,7 @@ pub mod image;
 pub mod matching;
 pub mod module;
 pub mod optimize;
+pub mod place;
 pub mod solve;
 pub mod system;
 pub mod techniques;
