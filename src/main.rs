@@ -11,6 +11,7 @@ mod runner;
 mod select;
 mod sweep;
 mod tables;
+mod vocab_file;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -45,6 +46,8 @@ enum Command {
     /// The regression suite: short synthetic sequences x the four configurations against the
     /// golden figures (tests/golden/regression.toml); `--update` rewrites them.
     Regress(commands::regress::RegressArgs),
+    /// Vocabularies of ORB words for place recognition: train, convert (ORBvoc.txt <-> binary), info.
+    Vocab(commands::vocab::VocabArgs),
 }
 
 fn main() -> ExitCode {
@@ -59,6 +62,7 @@ fn main() -> ExitCode {
         Command::Fetch(a) => commands::fetch::run(a),
         Command::Features(a) => commands::features::run(a),
         Command::Regress(a) => commands::regress::run(a),
+        Command::Vocab(a) => commands::vocab::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

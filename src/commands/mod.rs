@@ -9,3 +9,4 @@ pub mod run;
 pub mod sweep;
 pub mod synth;
 pub mod table;
+pub mod vocab;
