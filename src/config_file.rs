@@ -31,12 +31,34 @@ fn merge(base: &mut toml::Value, over: toml::Value) {
     }
 }
 
-/// Overlays the TOML file at `path` (any subset of the fields of `Config`) on `base`.
-pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
+fn read_toml(path: &Path) -> Result<toml::Value> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let over: toml::Value =
-        toml::from_str(&text).with_context(|| format!("{}: not valid TOML", path.display()))?;
+    toml::from_str(&text).with_context(|| format!("{}: not valid TOML", path.display()))
+}
+
+/// The `vocabulary = "FILE"` of a configuration file (relative to the file's folder; `"none"`
+/// for no place recognition), if it has one. It is the CLI's setting, not slam-core's: the
+/// vocabulary is data handed to the system, not a parameter.
+pub fn vocabulary_in_file(path: &Path) -> Result<Option<std::path::PathBuf>> {
+    match read_toml(path)?.get("vocabulary") {
+        None => Ok(None),
+        Some(toml::Value::String(v)) if v == "none" => Ok(Some(v.into())),
+        Some(toml::Value::String(v)) => Ok(Some(path.parent().unwrap_or(Path::new("")).join(v))),
+        Some(_) => anyhow::bail!(
+            "{}: `vocabulary` must be a file name (or \"none\")",
+            path.display()
+        ),
+    }
+}
+
+/// Overlays the TOML file at `path` (any subset of the fields of `Config`, plus `vocabulary`,
+/// see [`vocabulary_in_file`]) on `base`.
+pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
+    let mut over = read_toml(path)?;
+    if let toml::Value::Table(t) = &mut over {
+        t.remove("vocabulary");
+    }
     let mut value = toml::Value::try_from(base).context("serialising the default configuration")?;
     merge(&mut value, over);
     value

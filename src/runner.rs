@@ -4,7 +4,9 @@
 
 use ate_eval::{evaluate_ate, AteOptions, AteResult, Trajectory};
 use datasets::Sequence;
+use slam_core::place::Vocabulary;
 use slam_core::system::{Config, FrameStats, System};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A run fails ('F' in the paper's tables) when fewer than this fraction of the frames have a
@@ -58,14 +60,19 @@ impl RunOutcome {
     }
 }
 
-/// Runs `config` over `seq`, calling `on_frame` after each frame (for progress bars).
+/// Runs `config` over `seq` with place recognition over `vocabulary` (brute-force stand-ins
+/// without one), calling `on_frame` after each frame (for progress bars).
 pub fn run_sequence(
     seq: &Sequence,
     config: &Config,
+    vocabulary: Option<&Arc<Vocabulary>>,
     mut on_frame: impl FnMut(usize),
 ) -> RunOutcome {
     let start = Instant::now();
-    let mut system = System::new(seq.camera.clone(), config.clone());
+    let mut system = match vocabulary {
+        Some(v) => System::with_vocabulary(seq.camera.clone(), config.clone(), v.clone()),
+        None => System::new(seq.camera.clone(), config.clone()),
+    };
     let mut stats = Vec::with_capacity(seq.frames.len());
     for (i, frame) in seq.frames.iter().enumerate() {
         let r = system.track(frame);

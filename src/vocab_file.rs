@@ -48,6 +48,53 @@ pub fn write(path: &Path, voc: &Vocabulary) -> Result<()> {
     Ok(())
 }
 
+/// The vocabulary a run uses, and a name for it that changes with its content (recorded with
+/// sweep folders, so runs with different vocabularies are never resumed as each other).
+#[derive(Clone, Debug)]
+pub struct VocabularyChoice {
+    /// The vocabulary; `None` runs the brute-force stand-ins (`--vocabulary none`).
+    pub vocabulary: Option<std::sync::Arc<Vocabulary>>,
+    /// `none`, or the file name with an FNV-1a 64 of its bytes.
+    pub identity: String,
+}
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// The vocabulary named by `--vocabulary` (or the config file's `vocabulary`): a file, `none`
+/// for no place recognition (brute-force candidate search and matching, as before vocabularies
+/// existed), or, when absent, the built-in one.
+pub fn choose(flag: Option<&Path>) -> Result<VocabularyChoice> {
+    match flag {
+        None => Ok(VocabularyChoice {
+            vocabulary: Some(default_vocabulary()),
+            identity: format!(
+                "built-in {DEFAULT_NAME} (fnv {:016x})",
+                fnv1a(DEFAULT_BYTES)
+            ),
+        }),
+        Some(p) if p.as_os_str() == "none" => Ok(VocabularyChoice {
+            vocabulary: None,
+            identity: "none".into(),
+        }),
+        Some(p) => {
+            let bytes =
+                std::fs::read(p).with_context(|| format!("reading vocabulary {}", p.display()))?;
+            let name = p.file_name().map_or_else(
+                || p.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            Ok(VocabularyChoice {
+                vocabulary: Some(std::sync::Arc::new(read(p)?)),
+                identity: format!("{name} (fnv {:016x})", fnv1a(&bytes)),
+            })
+        }
+    }
+}
+
 /// File name of the vocabulary shipped in `assets/vocabulary/` and compiled into the binary.
 pub const DEFAULT_NAME: &str = "noisefree-k10L5.voc";
 

@@ -188,7 +188,17 @@ fn mapping_lag_is_pinned_per_folder() {
     // A synchronous folder refuses lagged runs (they would be resumed as the recorded ones).
     let sync = tmpdir("lag-sync");
     assert_ok(&tiny(&sync, &[]));
-    assert!(!sync.join("sweep-settings.toml").exists());
+    let settings = std::fs::read_to_string(sync.join("sweep-settings.toml")).unwrap();
+    assert!(settings.contains("mapping_lag = 0"), "{settings}");
+    assert!(
+        settings.contains("vocabulary = \"built-in noisefree-k10L5.voc"),
+        "{settings}"
+    );
+    // Runs of another vocabulary are refused too.
+    assert_clean_failure(
+        &tiny(&sync, &["--vocabulary", "none"]),
+        "vocabulary built-in",
+    );
     assert_clean_failure(&tiny(&sync, &["--mapping-lag", "2"]), "--mapping-lag 0");
     // A fresh folder takes the lag, records it, resumes with it and refuses another.
     let lagged = tmpdir("lag-2");

@@ -68,7 +68,11 @@ pub fn collect(
         bail!("--baseline must be a positive number of metres, got {baseline}");
     }
     let camera = generator.camera();
-    let mut system = System::new(camera.clone(), config.clone());
+    let mut system = System::with_vocabulary(
+        camera.clone(),
+        config.clone(),
+        crate::vocab_file::default_vocabulary(),
+    );
     let mut observations = Vec::new();
     let mut tracked_frames = 0;
     for_each_frame(generator, n, |frame| {

@@ -172,8 +172,10 @@ pub fn collect(
         mcor: Some(config.mcor.clone().unwrap_or_default()),
         ..config.clone()
     };
-    let mut baseline = System::new(camera.clone(), base_config);
-    let mut mcor = System::new(camera.clone(), mcor_config);
+    // The built-in vocabulary, as `noisefree run` uses by default.
+    let voc = crate::vocab_file::default_vocabulary();
+    let mut baseline = System::with_vocabulary(camera.clone(), base_config, voc.clone());
+    let mut mcor = System::with_vocabulary(camera.clone(), mcor_config, voc);
     let mut fig7: Option<Fig7Frame> = None;
     let mut truth = VerdictTruth::default();
     let mut gt = Trajectory::new();

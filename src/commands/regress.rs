@@ -117,6 +117,8 @@ pub fn run(args: RegressArgs) -> Result<()> {
             .1
     };
 
+    // The built-in vocabulary: a changed vocabulary changes the figures, as it should.
+    let vocabulary = Some(crate::vocab_file::default_vocabulary());
     // Every (case, rerun) pair is one single-threaded, deterministic run.
     let jobs: Vec<(usize, usize)> = (0..cases.len())
         .flat_map(|c| (0..=reruns).map(move |k| (c, k)))
@@ -144,7 +146,8 @@ pub fn run(args: RegressArgs) -> Result<()> {
             .map(|&(c, k)| {
                 let case = &cases[c];
                 let seq = perturbed(seq_of(case), k, args.perturbation);
-                let outcome = run_sequence(&seq, &case_config(&seq, case), |_| {});
+                let outcome =
+                    run_sequence(&seq, &case_config(&seq, case), vocabulary.as_ref(), |_| {});
                 bar.inc(1);
                 Figures::of(&outcome)
             })

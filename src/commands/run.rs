@@ -26,6 +26,11 @@ pub struct RunArgs {
     /// TOML configuration overlaid on the sensor's defaults (any subset of the fields).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// Place-recognition vocabulary: a DBoW2 text file (ORB-SLAM2's ORBvoc.txt) or a noisefree
+    /// binary one, or `none` for brute-force relocalization and matching [default: the config
+    /// file's `vocabulary`, else the built-in assets/vocabulary/noisefree-k10L5.voc].
+    #[arg(long, value_name = "FILE|none")]
+    pub vocabulary: Option<PathBuf>,
     /// Emulate ORB-SLAM2's concurrent local mapping: each keyframe is mapped up to N frames
     /// late (seeded), so runs with different --seed spread as ORB-SLAM2's do [default: 0,
     /// synchronous as in the paper's protocol: runs of one sequence differ only where
@@ -130,6 +135,12 @@ pub fn run(args: RunArgs) -> Result<()> {
             mapping_lag: args.mapping_lag,
         },
     );
+    let vocab_flag = match (&args.vocabulary, &args.config) {
+        (Some(v), _) => Some(v.clone()),
+        (None, Some(c)) => crate::config_file::vocabulary_in_file(c)?,
+        (None, None) => None,
+    };
+    let vocabulary = crate::vocab_file::choose(vocab_flag.as_deref())?;
     let cname = config_name(&config);
     let out = args
         .out
@@ -172,7 +183,9 @@ pub fn run(args: RunArgs) -> Result<()> {
                 bar.set_prefix(format!("seed {seed}"));
                 let mut cfg = config.clone();
                 cfg.seed = seed;
-                let o = run_sequence(&seq, &cfg, |i| bar.set_position(i as u64));
+                let o = run_sequence(&seq, &cfg, vocabulary.vocabulary.as_ref(), |i| {
+                    bar.set_position(i as u64)
+                });
                 bar.finish_and_clear();
                 (seed, o)
             })

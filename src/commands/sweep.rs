@@ -6,15 +6,17 @@ use crate::config_file::{base_config, overlay_file};
 use crate::runner::run_sequence;
 use crate::select::{load, LoadOptions, Source};
 use crate::sweep::plan::{expand, parse_values, ConfigKind, Grids, Job, Shard};
-use crate::sweep::store::{pin_mapping_lag, RunRecord, RunStore};
+use crate::sweep::store::{pin_settings, FolderSettings, RunRecord, RunStore};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{write_atomic, write_tum};
 use datasets::{Catalog, Class, EntryFormat};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
+use slam_core::place::Vocabulary;
 use slam_core::system::Config;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Arguments of `noisefree sweep`.
@@ -69,6 +71,11 @@ pub struct SweepArgs {
     /// TOML configuration overlaid on the defaults of every run.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// Place-recognition vocabulary: a DBoW2 text file (ORB-SLAM2's ORBvoc.txt) or a noisefree
+    /// binary one, or `none` for brute-force relocalization and matching [default: the config
+    /// file's `vocabulary`, else the built-in assets/vocabulary/noisefree-k10L5.voc].
+    #[arg(long, value_name = "FILE|none")]
+    pub vocabulary: Option<PathBuf>,
     /// Emulate ORB-SLAM2's concurrent local mapping: each keyframe is mapped up to N frames
     /// late (seeded), so runs with different --seed spread as ORB-SLAM2's do [default: 0,
     /// synchronous as in the paper's protocol: runs of one sequence differ only where
@@ -224,7 +231,19 @@ pub fn run(args: SweepArgs) -> Result<()> {
         (None, Some(p)) => overlay_file(&Config::default(), p)?.mapping_lag,
         (None, None) => 0,
     };
-    pin_mapping_lag(&args.out, mapping_lag)?;
+    let vocab_flag = match (&args.vocabulary, &args.config) {
+        (Some(v), _) => Some(v.clone()),
+        (None, Some(c)) => crate::config_file::vocabulary_in_file(c)?,
+        (None, None) => None,
+    };
+    let vocabulary = crate::vocab_file::choose(vocab_flag.as_deref())?;
+    pin_settings(
+        &args.out,
+        &FolderSettings {
+            mapping_lag,
+            vocabulary: vocabulary.identity.clone(),
+        },
+    )?;
     let mine: Vec<&Job> = all_jobs
         .iter()
         .enumerate()
@@ -328,7 +347,8 @@ pub fn run(args: SweepArgs) -> Result<()> {
                         if started_runs.fetch_add(1, Ordering::SeqCst) >= max_runs {
                             return Ok(());
                         }
-                        let rec = run_job(&seq, &base, job, &args.out)?;
+                        let rec =
+                            run_job(&seq, &base, vocabulary.vocabulary.as_ref(), job, &args.out)?;
                         store.append(&rec)?;
                         finished.fetch_add(1, Ordering::SeqCst);
                         bar.inc(1);
@@ -357,9 +377,15 @@ pub fn run(args: SweepArgs) -> Result<()> {
 
 /// Runs one job on a decoded sequence, writes its trajectory (in the ground truth's frame, for
 /// the figures) and, for seed 0, its per-frame statistics; returns its record.
-fn run_job(seq: &datasets::Sequence, base: &Config, job: &Job, out: &Path) -> Result<RunRecord> {
+fn run_job(
+    seq: &datasets::Sequence,
+    base: &Config,
+    vocabulary: Option<&Arc<Vocabulary>>,
+    job: &Job,
+    out: &Path,
+) -> Result<RunRecord> {
     let cfg = job_config(base, job);
-    let o = run_sequence(seq, &cfg, |_| {});
+    let o = run_sequence(seq, &cfg, vocabulary, |_| {});
     let dir = out
         .join("trajectories")
         .join(&job.sequence)

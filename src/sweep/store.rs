@@ -83,53 +83,101 @@ impl RunRecord {
 /// without it was swept synchronously (lag 0), as every sweep before the option existed.
 pub const SETTINGS_FILE: &str = "sweep-settings.toml";
 
-/// The emulated local-mapping lag of the runs in sweep folder `dir` ([`SETTINGS_FILE`]; 0 when
-/// absent).
-pub fn mapping_lag_of(dir: &Path) -> Result<u32> {
+/// How every run of a sweep folder was made, beyond what a run's key holds: runs made with
+/// other settings would be resumed as the recorded ones and averaged with them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FolderSettings {
+    /// The emulated local-mapping lag (`--mapping-lag`).
+    pub mapping_lag: u32,
+    /// The place-recognition vocabulary (`--vocabulary`): `none` or its name and content hash.
+    pub vocabulary: String,
+}
+
+impl Default for FolderSettings {
+    /// A folder without [`SETTINGS_FILE`]: synchronous runs from before vocabularies existed
+    /// (brute-force relocalization: `none`).
+    fn default() -> Self {
+        FolderSettings {
+            mapping_lag: 0,
+            vocabulary: "none".into(),
+        }
+    }
+}
+
+/// The settings recorded in sweep folder `dir` ([`SETTINGS_FILE`]; defaults when absent).
+pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
     let path = dir.join(SETTINGS_FILE);
     match std::fs::read_to_string(&path) {
         Ok(text) => {
             let v: toml::Value = toml::from_str(&text)
                 .with_context(|| format!("{}: not valid TOML", path.display()))?;
-            v.get("mapping_lag")
-                .and_then(toml::Value::as_integer)
-                .and_then(|x| u32::try_from(x).ok())
-                .with_context(|| format!("{}: no valid mapping_lag", path.display()))
+            let mapping_lag = match v.get("mapping_lag") {
+                None => 0,
+                Some(x) => x
+                    .as_integer()
+                    .and_then(|x| u32::try_from(x).ok())
+                    .with_context(|| format!("{}: no valid mapping_lag", path.display()))?,
+            };
+            let vocabulary = match v.get("vocabulary") {
+                None => "none".to_string(),
+                Some(x) => x
+                    .as_str()
+                    .with_context(|| format!("{}: vocabulary is not a string", path.display()))?
+                    .to_string(),
+            };
+            Ok(FolderSettings {
+                mapping_lag,
+                vocabulary,
+            })
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(0),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(FolderSettings::default()),
         Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
     }
 }
 
-/// Makes sure every run recorded in `dir` uses mapping lag `lag`: the lag is not part of a
-/// run's key, so runs of different lags in one folder would be resumed as each other and
-/// averaged together. A folder with runs of another lag is an error; a folder without runs
-/// takes the new lag (recorded in [`SETTINGS_FILE`] when it is not 0).
-pub fn pin_mapping_lag(dir: &Path, lag: u32) -> Result<()> {
+/// The emulated local-mapping lag of the runs in sweep folder `dir` (0 when not recorded).
+pub fn mapping_lag_of(dir: &Path) -> Result<u32> {
+    Ok(settings_of(dir)?.mapping_lag)
+}
+
+/// Makes sure every run recorded in `dir` was made with `settings`. A folder with runs of
+/// other settings is an error; a folder without runs takes the new settings (recorded in
+/// [`SETTINGS_FILE`]).
+pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
     let path = dir.join(SETTINGS_FILE);
-    let recorded = mapping_lag_of(dir)?;
-    if recorded == lag {
+    let recorded = settings_of(dir)?;
+    let exists = path.exists();
+    if recorded == *settings && exists {
         return Ok(());
     }
     if !load_dir(dir)?.is_empty() {
-        bail!(
-            "{} holds runs made with --mapping-lag {recorded}; this sweep asks for {lag}: use \
-             another --out folder (runs of different lags would be resumed as each other and \
-             averaged together)",
-            dir.display()
-        );
+        if recorded.mapping_lag != settings.mapping_lag {
+            bail!(
+                "{} holds runs made with --mapping-lag {}; this sweep asks for {}: use another \
+                 --out folder (runs of different lags would be resumed as each other and \
+                 averaged together)",
+                dir.display(),
+                recorded.mapping_lag,
+                settings.mapping_lag
+            );
+        }
+        if recorded.vocabulary != settings.vocabulary {
+            bail!(
+                "{} holds runs made with vocabulary {}; this sweep uses {}: use another --out \
+                 folder, or pass the vocabulary of those runs with --vocabulary",
+                dir.display(),
+                recorded.vocabulary,
+                settings.vocabulary
+            );
+        }
     }
-    if lag == 0 {
-        return std::fs::remove_file(&path).with_context(|| format!("removing {}", path.display()));
-    }
-    ate_eval::io::write_atomic(
-        &path,
-        format!(
-            "# the emulated local-mapping lag of every run in this folder\nmapping_lag = {lag}\n"
-        )
-        .as_bytes(),
-    )
-    .with_context(|| format!("writing {}", path.display()))
+    let text = format!(
+        "# how every run in this folder was made (a sweep with other settings is refused here)\n\
+         mapping_lag = {}\nvocabulary = {:?}\n",
+        settings.mapping_lag, settings.vocabulary
+    );
+    ate_eval::io::write_atomic(&path, text.as_bytes())
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// File name of the record of a shard (or of an unsharded sweep).

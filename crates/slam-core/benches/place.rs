@@ -74,7 +74,11 @@ fn place(c: &mut Criterion) {
     let (q, _) = voc.transform(&frame, 4);
     c.bench_function("database relocalization query, 1000 keyframes", |b| {
         b.iter(|| {
-            db.relocalization_candidates(black_box(&q), |k| &bows[k.index()], |_, _| Vec::new())
+            db.relocalization_candidates(
+                black_box(&q),
+                |k| Some(&bows[k.index()]),
+                |_, _| Vec::new(),
+            )
         })
     });
     let text = voc.to_text();

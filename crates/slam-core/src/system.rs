@@ -28,6 +28,7 @@ use crate::module::pose_estimation::{mcor_frame_gate, renormalized, NoiseHooks};
 use crate::module::relocalization::{relocalize, RelocalizationContext, RelocalizationParams};
 use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
 use crate::optimize::{BaConfig, PoseOptConfig};
+use crate::place::{PlaceRecognition, Vocabulary};
 
 pub use crate::module::noise::{AvcParams, McorParams};
 
@@ -220,6 +221,7 @@ pub struct System {
     records: Vec<FrameRecord>,
     stats: Vec<FrameStats>,
     pending: VecDeque<PendingKeyFrame>,
+    place: Option<PlaceRecognition>,
 }
 
 /// What local mapping needs of the system (a free function, so that the map and the mapper
@@ -274,6 +276,30 @@ impl System {
             records: Vec::new(),
             stats: Vec::new(),
             pending: VecDeque::new(),
+            place: None,
+        }
+    }
+
+    /// A system with an empty map and place recognition over `vocabulary`, as ORB-SLAM2 runs:
+    /// relocalization candidates from the keyframe database and BoW-guided matching for
+    /// relocalization and reference-keyframe tracking. ([`System::new`] has no vocabulary and
+    /// uses brute-force stand-ins.)
+    pub fn with_vocabulary(camera: Camera, config: Config, vocabulary: Arc<Vocabulary>) -> Self {
+        let mut s = Self::new(camera, config);
+        s.place = Some(PlaceRecognition::new(vocabulary));
+        s
+    }
+
+    /// Indexes a new keyframe in the keyframe database (with its frame's BoW, computed now if
+    /// tracking did not need it yet).
+    fn index_keyframe(&mut self, kf: KeyFrameId, cur: &mut TrackedFrame) {
+        let Some(place) = self.place.as_mut() else {
+            return;
+        };
+        let fb = cur.bow(place);
+        place.database.add(kf, &fb.bow);
+        if let Some(k) = self.map.keyframe_mut(kf) {
+            k.bow = Some(fb);
         }
     }
 
@@ -442,6 +468,7 @@ impl System {
             cur.map_points[i] = Some(mp);
             created.push(mp);
         }
+        self.index_keyframe(kf, cur);
         cur.reference_kf = Some(kf);
         self.tracker.reference_kf = Some(kf);
         self.tracker.local_keyframes = vec![kf];
@@ -469,6 +496,7 @@ impl System {
             pose_cfg: &self.pose_cfg,
             hooks,
             max_frames,
+            place: self.place.as_ref(),
         };
         let mut relocalized = false;
         let mut ok = if self.state.is_tracked() {
@@ -496,6 +524,7 @@ impl System {
                 params: &self.config.relocalization,
                 pose_cfg: &self.pose_cfg,
                 hooks,
+                place: self.place.as_ref(),
             };
             match relocalize(cur, &self.map, &rctx, &mut self.rng) {
                 Some(kf) => {
@@ -560,6 +589,7 @@ impl System {
             if let Some((kf, created)) =
                 create_keyframe(cur, &mut self.map, &self.camera, &self.levels)
             {
+                self.index_keyframe(kf, cur);
                 self.tracker.reference_kf = Some(kf);
                 cur.reference_kf = Some(kf);
                 self.last_keyframe_frame = cur.id;

@@ -47,6 +47,8 @@ pub struct KeyFrame {
     pub ba_fixed_for_kf: u32,
     /// See `ba_local_for_kf`.
     pub fuse_target_for_kf: u32,
+    /// BoW vector and direct index (when the system has a vocabulary).
+    pub bow: Option<Arc<crate::place::FrameBow>>,
 }
 
 impl KeyFrame {
@@ -76,6 +78,7 @@ impl KeyFrame {
             ba_local_for_kf: 0,
             ba_fixed_for_kf: 0,
             fuse_target_for_kf: 0,
+            bow: None,
         }
     }
 

@@ -26,9 +26,19 @@ pub struct TrackedFrame {
     pub outliers: Vec<bool>,
     /// Reference keyframe (the one sharing most map points, set by local-map tracking).
     pub reference_kf: Option<KeyFrameId>,
+    /// BoW vector and direct index, once computed (only with a vocabulary, and only when
+    /// reference tracking, relocalization or a new keyframe needs them).
+    pub bow: Option<Arc<crate::place::FrameBow>>,
 }
 
 impl TrackedFrame {
+    /// The frame's BoW (computed with `place` the first time it is asked for).
+    pub fn bow(&mut self, place: &crate::place::PlaceRecognition) -> Arc<crate::place::FrameBow> {
+        self.bow
+            .get_or_insert_with(|| place.frame_bow(&self.features.descriptors))
+            .clone()
+    }
+
     /// A frame with no pose and no matches yet.
     pub fn new(id: u64, timestamp: f64, features: Arc<Features>) -> Self {
         let n = features.len();
@@ -40,6 +50,7 @@ impl TrackedFrame {
             map_points: vec![None; n],
             outliers: vec![false; n],
             reference_kf: None,
+            bow: None,
         }
     }
 

@@ -1,10 +1,12 @@
 //! Descriptor matching between frames, keyframes and map points, one file per strategy (after
 //! stella_vslam's `match/`): [`projection`] (map points projected into a frame: motion model,
-//! local map, relocalization), [`brute`] (keyframe -> frame by descriptor only, for the
-//! reference-keyframe fallback and relocalization), [`epipolar`] (keyframe pairs for
+//! local map, relocalization), [`bow`] (keyframe -> frame under the same vocabulary node, for
+//! the reference-keyframe fallback and relocalization), [`brute`] (the same by descriptor only,
+//! when no vocabulary is loaded), [`epipolar`] (keyframe pairs for
 //! triangulation), [`fuse`] (merging duplicate map points). All searches use the ORB-SLAM2
 //! thresholds (`TH_HIGH`, `TH_LOW`) and the rotation-consistency histogram below.
 
+pub mod bow;
 pub mod brute;
 pub mod epipolar;
 pub mod fuse;

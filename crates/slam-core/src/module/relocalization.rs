@@ -1,7 +1,8 @@
 //! Relocalization when tracking is lost (ORB-SLAM2's Tracking::Relocalization): candidate
-//! keyframes by descriptor similarity (brute force over the keyframes instead of a bag of
-//! words), then per candidate a seeded pose RANSAC, pose optimization and up to two projection
-//! searches to gather at least 50 inliers. Candidates are tried one after the other in score
+//! keyframes from the keyframe database (shared words, score accumulated over covisible
+//! keyframes) matched by BoW-guided search; without a vocabulary, by descriptor similarity
+//! (brute force over the keyframes). Then per candidate a seeded pose RANSAC, pose optimization
+//! and up to two projection searches to gather at least 50 inliers. Candidates are tried one after the other in score
 //! order (ORB-SLAM2 interleaves 5 RANSAC iterations per candidate; same acceptance rules).
 
 use std::collections::BTreeSet;
@@ -12,9 +13,11 @@ use serde::{Deserialize, Serialize};
 use super::pose_estimation::{optimize_frame_pose, NoiseHooks};
 use crate::camera::Camera;
 use crate::data::{KeyFrameId, Map, MapPointId, ScaleLevels, TrackedFrame};
+use crate::matching::bow::search_by_bow;
 use crate::matching::brute::{search_keyframe_frame, similarity_score};
 use crate::matching::projection::search_by_projection_keyframe;
 use crate::optimize::PoseOptConfig;
+use crate::place::PlaceRecognition;
 use crate::solve::{pose_ransac, PoseCorrespondence, PoseRansacParams};
 
 /// Relocalization thresholds (ORB-SLAM2's values where it has them).
@@ -78,6 +81,10 @@ pub struct RelocalizationContext<'a> {
     pub pose_cfg: &'a PoseOptConfig,
     /// MC-OR / AVC switches.
     pub hooks: NoiseHooks<'a>,
+    /// Vocabulary and keyframe database: candidates from the database and BoW-guided matching
+    /// as in ORB-SLAM2; without them, the brute-force stand-ins of [`relocalization_candidates`]
+    /// and [`search_keyframe_frame`].
+    pub place: Option<&'a PlaceRecognition>,
 }
 
 /// Candidate keyframes ranked by similarity score (descending, ties by id).
@@ -138,11 +145,39 @@ pub fn relocalize(
         epsilon: p.ransac_epsilon,
         chi2_threshold: p.ransac_chi2,
     };
-    for kf in relocalization_candidates(frame, map, p) {
+    let candidates = match ctx.place {
+        Some(place) => {
+            let fb = frame.bow(place);
+            place.database.relocalization_candidates(
+                &fb.bow,
+                |k| {
+                    map.keyframe(k)
+                        .and_then(|kf| kf.bow.as_deref())
+                        .map(|b| &b.bow)
+                },
+                |k, n| {
+                    map.keyframe(k)
+                        .map_or_else(Vec::new, |kf| kf.best_covisibles(n))
+                },
+            )
+        }
+        None => relocalization_candidates(frame, map, p),
+    };
+    for kf in candidates {
         let Some(k) = map.keyframe(kf) else {
             continue;
         };
-        let (matches, n) = search_keyframe_frame(k, &frame.features, p.match_ratio, map);
+        let (matches, n) = match (&frame.bow, &k.bow) {
+            (Some(fb), Some(kb)) if ctx.place.is_some() => search_by_bow(
+                k,
+                &kb.features,
+                &frame.features,
+                &fb.features,
+                p.match_ratio,
+                map,
+            ),
+            _ => search_keyframe_frame(k, &frame.features, p.match_ratio, map),
+        };
         if n < p.min_matches {
             continue;
         }

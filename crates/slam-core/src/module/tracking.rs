@@ -8,11 +8,13 @@ use serde::{Deserialize, Serialize};
 use super::pose_estimation::{optimize_frame_pose, renormalized, NoiseHooks};
 use crate::camera::{Camera, SensorKind};
 use crate::data::{KeyFrameId, Map, MapPointId, ScaleLevels, TrackedFrame};
+use crate::matching::bow::search_by_bow;
 use crate::matching::brute::search_keyframe_frame;
 use crate::matching::projection::{
     is_in_frustum, search_by_projection_last_frame, search_local_points,
 };
 use crate::optimize::PoseOptConfig;
+use crate::place::PlaceRecognition;
 
 /// Tracking thresholds; defaults are ORB-SLAM2's RGB-D / stereo values.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -88,6 +90,8 @@ pub struct TrackingContext<'a> {
     pub hooks: NoiseHooks<'a>,
     /// Sequence frame rate (ORB-SLAM2's maxFrames).
     pub max_frames: u64,
+    /// Vocabulary (and database): reference-keyframe tracking matches by BoW when present.
+    pub place: Option<&'a PlaceRecognition>,
 }
 
 /// Tracking state carried from frame to frame.
@@ -177,8 +181,14 @@ impl Tracker {
         ) else {
             return false;
         };
-        let (matches, n) =
-            search_keyframe_frame(kf, &frame.features, ctx.params.reference_ratio, map);
+        let ratio = ctx.params.reference_ratio;
+        let (matches, n) = match (ctx.place, kf.bow.as_deref()) {
+            (Some(place), Some(kb)) => {
+                let fb = frame.bow(place);
+                search_by_bow(kf, &kb.features, &frame.features, &fb.features, ratio, map)
+            }
+            _ => search_keyframe_frame(kf, &frame.features, ratio, map),
+        };
         if n < ctx.params.reference_min_matches {
             return false;
         }

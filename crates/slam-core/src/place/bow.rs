@@ -7,6 +7,16 @@ pub type WordId = u32;
 /// Id of a vocabulary node (0 is the root).
 pub type NodeId = u32;
 
+/// The place-recognition view of one frame: its BoW vector and its direct index, computed once
+/// (when a frame first needs it) and shared with the keyframe made from it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameBow {
+    /// The L1-normalised BoW vector.
+    pub bow: BowVector,
+    /// Features grouped by their node at the direct-index level.
+    pub features: FeatureVector,
+}
+
 /// A sparse bag-of-words vector: (word, weight) pairs sorted by word, without repeats.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BowVector {

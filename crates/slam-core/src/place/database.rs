@@ -85,26 +85,27 @@ impl KeyFrameDatabase {
 
     /// Scored keyframes among `shared` (from [`KeyFrameDatabase::shared_words`]) that share
     /// more than [`MIN_COMMON_WORDS_RATIO`] of the most shared words and pass `keep`.
+    /// `bow_of` gives a keyframe's BoW vector, `None` for a keyframe culled since it was
+    /// indexed (skipped as if erased).
     pub fn scored_candidates<'a>(
         shared: &[(KeyFrameId, usize)],
         bow: &BowVector,
-        bow_of: impl Fn(KeyFrameId) -> &'a BowVector,
+        bow_of: impl Fn(KeyFrameId) -> Option<&'a BowVector>,
         keep: impl Fn(KeyFrameId) -> bool,
     ) -> Vec<Candidate> {
-        let max_common = shared
+        let live: Vec<(KeyFrameId, usize, &BowVector)> = shared
             .iter()
             .filter(|(kf, _)| keep(*kf))
-            .map(|&(_, c)| c)
-            .max()
-            .unwrap_or(0);
+            .filter_map(|&(kf, c)| bow_of(kf).map(|b| (kf, c, b)))
+            .collect();
+        let max_common = live.iter().map(|&(_, c, _)| c).max().unwrap_or(0);
         let min_common = MIN_COMMON_WORDS_RATIO * max_common as f64;
-        shared
-            .iter()
-            .filter(|&&(kf, c)| c as f64 > min_common && keep(kf))
-            .map(|&(kf, c)| Candidate {
+        live.into_iter()
+            .filter(|&(_, c, _)| c as f64 > min_common)
+            .map(|(kf, c, b)| Candidate {
                 keyframe: kf,
                 common_words: c,
-                score: score_l1(bow, bow_of(kf)),
+                score: score_l1(bow, b),
             })
             .collect()
     }
@@ -117,7 +118,7 @@ impl KeyFrameDatabase {
     pub fn relocalization_candidates<'a>(
         &self,
         bow: &BowVector,
-        bow_of: impl Fn(KeyFrameId) -> &'a BowVector,
+        bow_of: impl Fn(KeyFrameId) -> Option<&'a BowVector>,
         best_covisible: impl Fn(KeyFrameId, usize) -> Vec<KeyFrameId>,
     ) -> Vec<KeyFrameId> {
         let shared = self.shared_words(bow);

@@ -95,7 +95,7 @@ fn database_returns_the_revisited_place_among_hundreds() {
     let no_covisibility = |_: KeyFrameId, _: usize| Vec::new();
     for target in [3usize, 77, 150, 399] {
         let (q, _) = voc.transform(&view(&ps[target], 12, 0.3, 9000 + target as u64), 4);
-        let c = db.relocalization_candidates(&q, |k| &bows[k.index()], no_covisibility);
+        let c = db.relocalization_candidates(&q, |k| Some(&bows[k.index()]), no_covisibility);
         assert_eq!(
             c.first(),
             Some(&KeyFrameId(target as u32)),
@@ -105,7 +105,7 @@ fn database_returns_the_revisited_place_among_hundreds() {
     // Erasing the keyframe makes it unfindable.
     db.erase(KeyFrameId(77), &bows[77]);
     let (q, _) = voc.transform(&view(&ps[77], 12, 0.3, 9077), 4);
-    let c = db.relocalization_candidates(&q, |k| &bows[k.index()], no_covisibility);
+    let c = db.relocalization_candidates(&q, |k| Some(&bows[k.index()]), no_covisibility);
     assert!(!c.contains(&KeyFrameId(77)));
 }
 
