@@ -1,8 +1,9 @@
 //! Keyframe-pair matching for triangulation (ORB-SLAM2's SearchForTriangulation): keypoints not
 //! yet associated to a map point in either keyframe, matched by descriptor (<= TH_LOW) among
 //! candidates that lie on the epipolar line (squared distance < 3.84 sigma^2) and, when neither
-//! has a depth, not near the epipole. ORB-SLAM2 limits candidates to the same vocabulary node;
-//! we scan every unassociated keypoint of the second keyframe (exhaustive, same acceptance).
+//! has a depth, not near the epipole. With a vocabulary, candidates are limited to the same
+//! direct-index node, as ORB-SLAM2 does (visited node by node); without one, every unassociated
+//! keypoint of the second keyframe is scanned (exhaustive, same acceptance).
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -54,14 +55,30 @@ pub fn search_for_triangulation(
     };
     let free =
         |kf: &KeyFrame, i: usize| kf.map_points[i].is_none_or(|m| map.map_point(m).is_none());
-    let free2: Vec<usize> = (0..kf2.features.len()).filter(|&i| free(kf2, i)).collect();
+    // Candidate groups: features of kf1 and of kf2 that may match each other.
+    let groups: Vec<(Vec<usize>, Vec<usize>)> = match (kf1.bow.as_deref(), kf2.bow.as_deref()) {
+        (Some(b1), Some(b2)) => b1
+            .features
+            .common_nodes(&b2.features)
+            .map(|(f1, f2)| {
+                (
+                    f1.iter().copied().filter(|&i| free(kf1, i)).collect(),
+                    f2.iter().copied().filter(|&i| free(kf2, i)).collect(),
+                )
+            })
+            .collect(),
+        _ => vec![(
+            (0..kf1.features.len()).filter(|&i| free(kf1, i)).collect(),
+            (0..kf2.features.len()).filter(|&i| free(kf2, i)).collect(),
+        )],
+    };
     let mut matched2 = vec![false; kf2.features.len()];
     let mut pairs: Vec<(usize, usize)> = Vec::new();
     let mut hist = RotationHistogram::new();
-    for idx1 in 0..kf1.features.len() {
-        if !free(kf1, idx1) {
-            continue;
-        }
+    for (idx1, free2) in groups
+        .iter()
+        .flat_map(|(g1, g2)| g1.iter().map(move |&i| (i, g2)))
+    {
         let kp1 = &kf1.features.keypoints[idx1];
         let stereo1 = kf1.features.u_right_of(idx1).is_some();
         let d1 = &kf1.features.descriptors[idx1];
@@ -72,7 +89,7 @@ pub fn search_for_triangulation(
             continue;
         }
         let (mut best, mut best_idx) = (TH_LOW + 1, usize::MAX);
-        for &idx2 in &free2 {
+        for &idx2 in free2 {
             if matched2[idx2] {
                 continue;
             }
