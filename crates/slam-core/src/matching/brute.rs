@@ -8,31 +8,44 @@ use super::RotationHistogram;
 use crate::data::{Features, KeyFrame, Map, MapPointId};
 use crate::feature::{hamming, TH_LOW};
 
-/// Matches the map points of `kf` to keypoints of `frame`. Returns, per frame keypoint, the
-/// matched map point, and the number of matches.
-pub fn search_keyframe_frame(
-    kf: &KeyFrame,
-    frame: &Features,
+/// Keyframe -> frame matches being gathered: each keyframe feature with a map point is offered
+/// its candidate frame keypoints; the closest unmatched one is taken if it passes TH_LOW and the
+/// ratio test, then the rotation-consistency check prunes the lot. Shared by the brute-force
+/// search here and the BoW-guided one ([`super::bow`]), which differ only in the candidates.
+pub(crate) struct KeyFrameMatcher {
+    matches: Vec<Option<MapPointId>>,
+    hist: RotationHistogram,
+    n: usize,
     ratio: f64,
-    map: &Map,
-) -> (Vec<Option<MapPointId>>, usize) {
-    let mut matches: Vec<Option<MapPointId>> = vec![None; frame.len()];
-    let mut hist = RotationHistogram::new();
-    let mut n = 0;
-    for (i, slot) in kf.map_points.iter().enumerate() {
-        let Some(id) = *slot else {
-            continue;
-        };
-        if map.map_point(id).is_none() {
-            continue;
+}
+
+impl KeyFrameMatcher {
+    /// No matches yet for a frame of `n_frame` keypoints.
+    pub(crate) fn new(n_frame: usize, ratio: f64) -> Self {
+        KeyFrameMatcher {
+            matches: vec![None; n_frame],
+            hist: RotationHistogram::new(),
+            n: 0,
+            ratio,
         }
+    }
+
+    /// Offers keyframe feature `i` (map point `id`) the frame keypoints `candidates`.
+    pub(crate) fn offer(
+        &mut self,
+        kf: &KeyFrame,
+        i: usize,
+        id: MapPointId,
+        frame: &Features,
+        candidates: impl IntoIterator<Item = usize>,
+    ) {
         let d_kf = &kf.features.descriptors[i];
         let (mut best, mut best2, mut best_idx) = (u32::MAX, u32::MAX, usize::MAX);
-        for (j, d_f) in frame.descriptors.iter().enumerate() {
-            if matches[j].is_some() {
+        for j in candidates {
+            if self.matches[j].is_some() {
                 continue;
             }
-            let d = hamming(d_kf, d_f);
+            let d = hamming(d_kf, &frame.descriptors[j]);
             if d < best {
                 best2 = best;
                 best = d;
@@ -41,21 +54,42 @@ pub fn search_keyframe_frame(
                 best2 = d;
             }
         }
-        if best <= TH_LOW && (best as f64) < ratio * best2 as f64 {
-            matches[best_idx] = Some(id);
-            n += 1;
-            hist.add(
+        if best <= TH_LOW && (best as f64) < self.ratio * best2 as f64 {
+            self.matches[best_idx] = Some(id);
+            self.n += 1;
+            self.hist.add(
                 kf.features.keypoints[i].angle,
                 frame.keypoints[best_idx].angle,
                 best_idx,
             );
         }
     }
-    for j in hist.rejected() {
-        matches[j] = None;
-        n -= 1;
+
+    /// The matches after the rotation check: per frame keypoint its map point, and the count.
+    pub(crate) fn finish(mut self) -> (Vec<Option<MapPointId>>, usize) {
+        for j in self.hist.rejected() {
+            self.matches[j] = None;
+            self.n -= 1;
+        }
+        (self.matches, self.n)
     }
-    (matches, n)
+}
+
+/// Matches the map points of `kf` to keypoints of `frame`. Returns, per frame keypoint, the
+/// matched map point, and the number of matches.
+pub fn search_keyframe_frame(
+    kf: &KeyFrame,
+    frame: &Features,
+    ratio: f64,
+    map: &Map,
+) -> (Vec<Option<MapPointId>>, usize) {
+    let mut m = KeyFrameMatcher::new(frame.len(), ratio);
+    for (i, slot) in kf.map_points.iter().enumerate() {
+        if let Some(id) = slot.filter(|&id| map.map_point(id).is_some()) {
+            m.offer(kf, i, id, frame, 0..frame.len());
+        }
+    }
+    m.finish()
 }
 
 /// Number of keypoints of `frame` (among `sample`) whose best match in `kf` (descriptor only)
