@@ -75,6 +75,8 @@ pub struct Switches {
     pub avc: bool,
     /// Emulated local-mapping lag in frames (`Config::mapping_lag`), overriding the file's.
     pub mapping_lag: Option<u32>,
+    /// Turn loop closing off (ablation; it is part of the ORB-SLAM2 baseline).
+    pub no_loop_closing: bool,
 }
 
 /// Applies the switches.
@@ -87,6 +89,9 @@ pub fn apply_switches(mut config: Config, s: Switches) -> Config {
     }
     if let Some(n) = s.mapping_lag {
         config.mapping_lag = n;
+    }
+    if s.no_loop_closing {
+        config.loop_closing.enabled = false;
     }
     config
 }

@@ -4,6 +4,7 @@
 
 use ate_eval::{evaluate_ate, AteOptions, AteResult, Trajectory};
 use datasets::Sequence;
+use slam_core::module::loop_closing::LoopEvent;
 use slam_core::place::Vocabulary;
 use slam_core::system::{Config, FrameStats, System};
 use std::sync::Arc;
@@ -30,10 +31,25 @@ pub struct RunOutcome {
     pub keyframes: usize,
     /// Map points in the final map.
     pub map_points: usize,
+    /// Whether loop closing ran (on in the configuration and a vocabulary loaded).
+    pub loop_closing: bool,
+    /// Loops closed, in order.
+    pub loops: Vec<ClosedLoop>,
     /// Wall time of the run, seconds (single thread).
     pub wall_s: f64,
     /// The failure verdict ('F').
     pub failed: bool,
+}
+
+/// A loop the run closed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClosedLoop {
+    /// Index of the frame on which it closed (0-based).
+    pub frame: usize,
+    /// That frame's timestamp, seconds.
+    pub timestamp: f64,
+    /// The keyframes involved and the size of the correction.
+    pub event: LoopEvent,
 }
 
 impl RunOutcome {
@@ -80,6 +96,15 @@ pub fn run_sequence(
         on_frame(i + 1);
     }
     let wall_s = start.elapsed().as_secs_f64();
+    let closing_frames = stats.iter().enumerate().filter(|(_, s)| s.loop_closed);
+    let loops: Vec<ClosedLoop> = closing_frames
+        .zip(system.loops())
+        .map(|((frame, s), event)| ClosedLoop {
+            frame,
+            timestamp: s.timestamp,
+            event: event.clone(),
+        })
+        .collect();
     let mut trajectory = Trajectory::new();
     for (t, pose) in system.trajectory() {
         trajectory.push(t, pose);
@@ -103,6 +128,8 @@ pub fn run_sequence(
         tracked,
         keyframes: system.keyframe_count(),
         map_points: system.map_point_count(),
+        loop_closing: config.loop_closing.enabled && vocabulary.is_some(),
+        loops,
         wall_s,
         failed,
     }

@@ -8,8 +8,6 @@ use std::path::{Path, PathBuf};
 /// Synthetic preset of the embedded default (`noisefree run` with no sequence): RGB-D with the
 /// Kinect-like depth noise model.
 pub const DEFAULT_PRESET: &str = "kinect";
-/// Frames of a synthetic sequence when `--frames` is not given (10 s at 30 Hz).
-pub const DEFAULT_SYNTH_FRAMES: usize = 300;
 
 /// Where a sequence comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,7 +45,8 @@ impl Source {
 pub struct LoadOptions {
     /// Data root for catalogued real sequences.
     pub data_dir: PathBuf,
-    /// Synthetic sequences: frames to generate; real ones: keep only the first N frames.
+    /// Synthetic sequences: frames to generate (default: the preset's, see
+    /// `synth::Preset::default_frames`); real ones: keep only the first N frames.
     pub frames: Option<usize>,
     /// Seed of a synthetic sequence's noise and scene (the sequence, not the SLAM run).
     pub synth_seed: u64,
@@ -62,9 +61,9 @@ pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Se
         Source::Catalog(name) => {
             let entry = catalog.get(name)?;
             if let Some(preset) = &entry.preset {
-                let config = synth::SynthConfig::preset(preset)?;
-                let generator = synth::Generator::try_new(config, opts.synth_seed)?;
-                let n = opts.frames.unwrap_or(DEFAULT_SYNTH_FRAMES);
+                let preset = synth::Preset::from_name(preset)?;
+                let generator = synth::Generator::try_new(preset.config(), opts.synth_seed)?;
+                let n = opts.frames.unwrap_or_else(|| preset.default_frames());
                 if n == 0 {
                     bail!("--frames must be at least 1");
                 }

@@ -374,12 +374,16 @@ mod tests {
             n_mcor_rejected_features: 0,
             keyframe_inserted: false,
             relocalized: false,
+            loop_detected: false,
+            loop_closed: false,
+            n_loops: 0,
             n_keyframes: 0,
             n_map_points: 0,
             time_features_ms: 0.0,
             time_tracking_ms: 0.0,
             time_mapping_ms: 0.0,
             time_ba_ms: 0.0,
+            time_loop_ms: 0.0,
         };
         let mut lost = a.clone();
         lost.state = slam_core::system::TrackingState::Lost;

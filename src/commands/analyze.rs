@@ -127,6 +127,7 @@ fn run_correlation(args: CorrelationArgs) -> Result<()> {
             mcor: args.mcor,
             avc: args.avc,
             mapping_lag: None,
+            no_loop_closing: false,
         },
     );
     let data = corr::collect(

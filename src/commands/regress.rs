@@ -181,7 +181,7 @@ pub fn run(args: RegressArgs) -> Result<()> {
         for ((case, f), s) in results.iter().zip(&spreads) {
             let t = s.tolerance(f);
             println!(
-                "{:<20} ATE {:.1e} m -> tol {:.3} mm; tracked {} kf {} mp {} reloc {}; {} of {} hashes changed",
+                "{:<20} ATE {:.1e} m -> tol {:.3} mm; tracked {} kf {} mp {} reloc {} loops {}; {} of {} hashes changed",
                 case.name(),
                 s.spread_ate_m,
                 t.ate_tol_m * 1e3,
@@ -189,6 +189,7 @@ pub fn run(args: RegressArgs) -> Result<()> {
                 s.spread_keyframes,
                 s.spread_map_points,
                 s.spread_relocalizations,
+                s.spread_loops,
                 s.spread_changed_hashes,
                 s.spread_runs
             );

@@ -52,6 +52,10 @@ pub struct RunArgs {
     /// Turn on AVC (paper III-B) with its default baseline (0.09 m).
     #[arg(long)]
     pub avc: bool,
+    /// Turn loop closing off (an ablation: ORB-SLAM2, and so the baseline, closes loops).
+    /// Loop closing needs a vocabulary; with --vocabulary none it is off anyway.
+    #[arg(long = "no-loop-closing")]
+    pub no_loop_closing: bool,
     /// Output folder [default: noisefree-out/<sequence>].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -90,6 +94,14 @@ pub fn run_summary(label: &str, config: &str, seed: u64, o: &RunOutcome) -> serd
         "ate": o.ate.as_ref().map(|a| a.stats),
         "frames": o.frames, "tracked": o.tracked, "failed": o.failed,
         "keyframes": o.keyframes, "map_points": o.map_points,
+        "loop_closing": o.loop_closing,
+        "loops_closed": o.loops.len(),
+        "loops": o.loops.iter().map(|l| json!({
+            "frame": l.frame, "timestamp": l.timestamp,
+            "keyframe": l.event.current.0, "loop_keyframe": l.event.loop_kf.0,
+            "matches": l.event.matches,
+            "correction_m": l.event.correction_m, "correction_deg": l.event.correction_deg,
+        })).collect::<Vec<_>>(),
         "mean_inliers": mi, "mean_outliers": mo,
         "wall_s": o.wall_s, "fps": o.fps(),
     })
@@ -101,6 +113,26 @@ fn write_run(dir: &Path, label: &str, config: &str, seed: u64, o: &RunOutcome) -
     let s = serde_json::to_string_pretty(&run_summary(label, config, seed, o))?;
     write_atomic(&dir.join("summary.json"), s.as_bytes())?;
     Ok(())
+}
+
+/// "2 loops closed (frames 812, 1240)", "no loop closed", or "loop closing off".
+fn loops_text(o: &RunOutcome) -> String {
+    if !o.loop_closing {
+        return "loop closing off".into();
+    }
+    match o.loops.len() {
+        0 => "no loop closed".into(),
+        n => format!(
+            "{n} loop{} closed (frame{} {})",
+            if n == 1 { "" } else { "s" },
+            if n == 1 { "" } else { "s" },
+            o.loops
+                .iter()
+                .map(|l| l.frame.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
 }
 
 /// Runs `noisefree run`.
@@ -133,6 +165,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             mcor: args.mcor,
             avc: args.avc,
             mapping_lag: args.mapping_lag,
+            no_loop_closing: args.no_loop_closing,
         },
     );
     let vocab_flag = match (&args.vocabulary, &args.config) {
@@ -205,12 +238,13 @@ pub fn run(args: RunArgs) -> Result<()> {
             .map(|a| format!("{a:.4} m"))
             .unwrap_or_else(|| "n/a".into());
         println!(
-            "{label} [{cname}] seed {seed}: ATE RMSE {ate}, tracked {}/{} frames{}, {} keyframes, {} map points, {:.1} fps",
+            "{label} [{cname}] seed {seed}: ATE RMSE {ate}, tracked {}/{} frames{}, {} keyframes, {} map points, {}, {:.1} fps",
             o.tracked,
             o.frames,
             if o.failed { " (FAILED)" } else { "" },
             o.keyframes,
             o.map_points,
+            loops_text(o),
             o.fps()
         );
     }

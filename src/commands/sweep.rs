@@ -82,6 +82,9 @@ pub struct SweepArgs {
     /// relocalization's RANSAC draws].
     #[arg(long = "mapping-lag", value_name = "N")]
     pub mapping_lag: Option<u32>,
+    /// Turn loop closing off in every run (an ablation; the folder records it).
+    #[arg(long = "no-loop-closing")]
+    pub no_loop_closing: bool,
     /// Synthetic sequences: number of frames (default 300); real ones: only the first N frames.
     #[arg(long, value_name = "N")]
     pub frames: Option<usize>,
@@ -237,11 +240,17 @@ pub fn run(args: SweepArgs) -> Result<()> {
         (None, None) => None,
     };
     let vocabulary = crate::vocab_file::choose(vocab_flag.as_deref())?;
+    let loop_closing_on = match &args.config {
+        _ if args.no_loop_closing => false,
+        Some(p) => overlay_file(&Config::default(), p)?.loop_closing.enabled,
+        None => true,
+    } && vocabulary.vocabulary.is_some();
     pin_settings(
         &args.out,
         &FolderSettings {
             mapping_lag,
             vocabulary: vocabulary.identity.clone(),
+            loop_closing: loop_closing_on,
         },
     )?;
     let mine: Vec<&Job> = all_jobs
@@ -329,6 +338,9 @@ pub fn run(args: SweepArgs) -> Result<()> {
             }
             if let Some(n) = args.mapping_lag {
                 base.mapping_lag = n;
+            }
+            if args.no_loop_closing {
+                base.loop_closing.enabled = false;
             }
             let bar = multi.add(ProgressBar::new(jobs.len() as u64));
             bar.set_style(
@@ -422,6 +434,7 @@ fn run_job(
         fps: o.fps(),
         wall_s: o.wall_s,
         synth_seed: job.synth_seed,
+        loops: Some(o.loops.len()),
     })
 }
 

@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Presets (easy to hard): clean, kinect, boundary, walking, stereo, \
-distorted, lag, hard, occluded.\nThe same preset, seed and frame count always give the same \
+distorted, lag, hard, occluded, loop.\nThe same preset, seed and frame count always give the same \
 bytes."
 )]
 pub struct SynthArgs {
@@ -19,12 +19,15 @@ pub struct SynthArgs {
     /// lateral, holes), boundary (strong lateral mixing, misregistration), walking (kinect and
     /// moving people), stereo (EuRoC-like pair, no depth), distorted (4 % depth scale + radial
     /// wobble), lag (2-frame depth lag, fast motion), hard (walking + distorted + lag),
-    /// occluded (lens covered for frames 120..150).
+    /// occluded (lens covered for frames 120..150), loop (a 40 s circuit round the room back to
+    /// its start and 5 s past it, with a depth error that makes odometry drift: for loop
+    /// closing).
     #[arg(long, default_value = "kinect")]
     pub preset: String,
-    /// Number of frames to write (30 Hz, so 300 frames = 10 s).
-    #[arg(long, default_value_t = 300)]
-    pub frames: usize,
+    /// Number of frames to write (30 Hz, so 300 frames = 10 s). Default: the preset's, 300
+    /// (1350 for loop: its circuit plus the revisit).
+    #[arg(long)]
+    pub frames: Option<usize>,
     /// Seed of the scene textures and of every noise draw.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -34,8 +37,13 @@ pub struct SynthArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Camera trajectory overriding the preset's: xyz (handheld translation, default), rpy
-    /// (rotation-heavy), spin (360 degrees in 20 s).
-    #[arg(long)]
+    /// (rotation-heavy), spin (360 degrees in 20 s), loop (a closed 40 s circuit round the room
+    /// looking at the walls, back to its start pose, then on round again), or the path of a
+    /// TUM trajectory file (`stamp tx ty tz qx qy qz qw`, camera-to-world, as TUM ground
+    /// truth): it is levelled (mean camera y axis = down), centred in the room at 1.3 m height
+    /// and replayed in its own time (interpolated); never scaled, so a path larger than the
+    /// room (4 x 4 x 1.7 m usable) or shorter than the frames asked for is refused.
+    #[arg(long, value_name = "NAME|FILE")]
     pub trajectory: Option<String>,
     /// Cover the lens with a flat featureless surface 0.5 m away for frames START..START+LEN,
     /// given as START:LEN (frames), e.g. 120:30.
@@ -66,22 +74,30 @@ fn parse_occlusion(s: &str) -> anyhow::Result<(usize, usize)> {
 
 /// Runs `noisefree synth`.
 pub fn run(args: SynthArgs) -> anyhow::Result<()> {
-    let mut config = synth::SynthConfig::preset(&args.preset)?;
+    let preset = synth::Preset::from_name(&args.preset)?;
+    let mut config = preset.config();
     if let Some(t) = &args.trajectory {
-        config.trajectory = synth::Trajectory::from_name(t)?;
+        config.trajectory = synth::Trajectory::from_arg(t)?;
+        if let synth::Trajectory::Recorded(path) = &config.trajectory {
+            if let Some(w) = path.warning() {
+                eprintln!("warning: {w}");
+            }
+        }
     }
     if let Some(o) = &args.occlusion {
         config.occlusion = Some(parse_occlusion(o)?);
     }
-    if args.frames == 0 {
+    let frames = args.frames.unwrap_or_else(|| preset.default_frames());
+    if frames == 0 {
         anyhow::bail!("--frames must be at least 1");
     }
     let gen = synth::Generator::try_new(config, args.seed)?;
+    gen.check_frames(frames)?;
     if args.force && args.out.exists() {
         std::fs::remove_dir_all(&args.out)
             .with_context(|| format!("removing {}", args.out.display()))?;
     }
-    let pb = ProgressBar::new(args.frames as u64);
+    let pb = ProgressBar::new(frames as u64);
     pb.set_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames {per_sec} eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -91,24 +107,24 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let progress = |_: usize| pb.inc(1);
     if gen.config().is_rgbd() {
-        synth::write_tum(&gen, args.frames, &args.out, progress)?;
+        synth::write_tum(&gen, frames, &args.out, progress)?;
     } else {
-        synth::write_euroc(&gen, args.frames, &args.out, progress)?;
+        synth::write_euroc(&gen, frames, &args.out, progress)?;
     }
     pb.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     println!(
         "wrote {} frames of preset '{}' (seed {}, trajectory {}) to {} in {:.1} s ({:.1} frames/s)",
-        args.frames,
+        frames,
         args.preset,
         args.seed,
         gen.config().trajectory.name(),
         args.out.display(),
         secs,
-        args.frames as f64 / secs.max(1e-9)
+        frames as f64 / secs.max(1e-9)
     );
     if let Some(sheet) = &args.contact_sheet {
-        synth::write_contact_sheet(&gen, args.frames, 4, sheet)?;
+        synth::write_contact_sheet(&gen, frames, 4, sheet)?;
         println!("wrote contact sheet {}", sheet.display());
     }
     Ok(())

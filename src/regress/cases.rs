@@ -5,12 +5,14 @@ use crate::sweep::plan::ConfigKind;
 use serde::{Deserialize, Serialize};
 
 /// One synthetic sequence of the suite: which path through the system it exercises.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SuiteSequence {
     /// Synthetic preset (datasets.toml / `synth --preset`).
     pub preset: &'static str,
     /// Camera trajectory overriding the preset's (`synth --trajectory`), if any.
     pub trajectory: Option<&'static str>,
+    /// Speed-up of the trajectory (1 = as the preset; 2 = the same path in half the time).
+    pub motion_scale: f64,
     /// Frames rendered and tracked.
     pub frames: usize,
     /// Seed of the sequence's realization (scene, textures, noise).
@@ -20,12 +22,17 @@ pub struct SuiteSequence {
 }
 
 impl SuiteSequence {
-    /// The preset, with the trajectory when it overrides the preset's: `stereo-spin`.
+    /// The preset, with the trajectory when it overrides the preset's and the speed-up when
+    /// there is one: `stereo-spin`, `distorted-spin-x2`.
     pub fn label(&self) -> String {
-        match self.trajectory {
+        let mut l = match self.trajectory {
             Some(t) => format!("{}-{t}", self.preset),
             None => self.preset.to_string(),
+        };
+        if self.motion_scale != 1.0 {
+            l.push_str(&format!("-x{}", self.motion_scale));
         }
+        l
     }
 
     /// Renders the sequence (deterministic: preset, trajectory and seed fix every pixel).
@@ -34,6 +41,7 @@ impl SuiteSequence {
         if let Some(t) = self.trajectory {
             config.trajectory = synth::Trajectory::from_name(t)?;
         }
+        config.motion_scale *= self.motion_scale;
         let generator = synth::Generator::try_new(config, self.synth_seed)?;
         let mut seq = datasets::from_synth(&generator, self.frames);
         seq.name = self.label();
@@ -44,10 +52,11 @@ impl SuiteSequence {
 /// The suite's sequences; every one runs under each of the four configurations with run seed
 /// [`SUITE_SEED`]. Short enough that rendering and tracking all of them takes about a minute
 /// on two cores in the tests' optimised dev profile.
-pub const SUITE: [SuiteSequence; 4] = [
+pub const SUITE: [SuiteSequence; 5] = [
     SuiteSequence {
         preset: "kinect",
         trajectory: None,
+        motion_scale: 1.0,
         frames: 150,
         synth_seed: 0,
         exercises: "RGB-D with the Kinect depth-noise model",
@@ -55,6 +64,7 @@ pub const SUITE: [SuiteSequence; 4] = [
     SuiteSequence {
         preset: "stereo",
         trajectory: Some("spin"),
+        motion_scale: 1.0,
         frames: 200,
         synth_seed: 0,
         exercises: "rectified stereo (EuRoC-like pair) turning on the spot: stereo matching, \
@@ -63,6 +73,7 @@ pub const SUITE: [SuiteSequence; 4] = [
     SuiteSequence {
         preset: "walking",
         trajectory: None,
+        motion_scale: 1.0,
         frames: 150,
         synth_seed: 0,
         exercises: "moving people: outliers, MC-OR's rejections",
@@ -70,9 +81,19 @@ pub const SUITE: [SuiteSequence; 4] = [
     SuiteSequence {
         preset: "occluded",
         trajectory: None,
+        motion_scale: 1.0,
         frames: 180,
         synth_seed: 0,
         exercises: "tracking lost behind a covered lens (frames 120-149), relocalization",
+    },
+    SuiteSequence {
+        preset: "distorted",
+        trajectory: Some("spin"),
+        motion_scale: 2.0,
+        frames: 450,
+        synth_seed: 0,
+        exercises: "a full turn on the spot in 10 s with systematic depth error (drift), then \
+                    the start seen again: loop detection, correction, essential graph, global BA",
     },
 ];
 
@@ -80,7 +101,7 @@ pub const SUITE: [SuiteSequence; 4] = [
 pub const SUITE_SEED: u64 = 0;
 
 /// One case: a suite sequence under one configuration.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Case {
     /// The sequence.
     pub sequence: SuiteSequence,
@@ -121,6 +142,9 @@ pub struct Figures {
     pub map_points: usize,
     /// Frames on which tracking was recovered by relocalization.
     pub relocalizations: usize,
+    /// Loops closed. (absent in golden files from before loop closing: 0)
+    #[serde(default)]
+    pub loops: usize,
     /// FNV-1a 64 of the trajectory's bits (stamps and poses): any change of behaviour, however
     /// small, changes it.
     pub hash: String,
@@ -135,6 +159,7 @@ impl Figures {
             keyframes: outcome.keyframes,
             map_points: outcome.map_points,
             relocalizations: outcome.stats.iter().filter(|s| s.relocalized).count(),
+            loops: outcome.loops.len(),
             hash: trajectory_hash(&outcome.trajectory),
         }
     }

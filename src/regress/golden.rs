@@ -41,6 +41,9 @@ pub struct Tolerance {
     pub map_points_tol: usize,
     /// Relocalizations, either way.
     pub relocalizations_tol: usize,
+    /// Loops closed, either way. (absent in golden files from before loop closing: 0)
+    #[serde(default)]
+    pub loops_tol: usize,
 }
 
 /// The largest deviation from the golden figures seen over the perturbed reruns.
@@ -58,6 +61,9 @@ pub struct Spread {
     pub spread_map_points: usize,
     /// Largest |relocalizations - golden|.
     pub spread_relocalizations: usize,
+    /// Largest |loops - golden|. (absent in golden files from before loop closing: 0)
+    #[serde(default)]
+    pub spread_loops: usize,
     /// Perturbed reruns whose trajectory hash differs from the golden one (0 would mean the
     /// perturbation did not reach the run at all).
     pub spread_changed_hashes: usize,
@@ -83,6 +89,7 @@ impl Spread {
             s.spread_relocalizations = s
                 .spread_relocalizations
                 .max(d(base.relocalizations, r.relocalizations));
+            s.spread_loops = s.spread_loops.max(d(base.loops, r.loops));
             s.spread_changed_hashes += usize::from(r.hash != base.hash);
         }
         s
@@ -104,6 +111,7 @@ impl Spread {
             keyframes_tol: count(self.spread_keyframes, base.keyframes, COUNT_REL_FLOOR),
             map_points_tol: count(self.spread_map_points, base.map_points, COUNT_REL_FLOOR),
             relocalizations_tol: count(self.spread_relocalizations, 0, 0.0),
+            loops_tol: count(self.spread_loops, 0, 0.0),
         }
     }
 }
@@ -227,6 +235,7 @@ fn judge(old: &GoldenCase, new: &Figures) -> Verdict {
         new.relocalizations,
         t.relocalizations_tol,
     );
+    count("loops", o.loops, new.loops, t.loops_tol);
     if !why.is_empty() {
         Verdict::Failed(why)
     } else if new.hash != o.hash {
@@ -277,8 +286,8 @@ fn ate_mm(a: Option<f64>) -> String {
 
 fn counts(f: &Figures) -> String {
     format!(
-        "{}/{}/{}/{}",
-        f.tracked, f.keyframes, f.map_points, f.relocalizations
+        "{}/{}/{}/{}/{}",
+        f.tracked, f.keyframes, f.map_points, f.relocalizations, f.loops
     )
 }
 
@@ -288,7 +297,7 @@ pub fn table(rows: &[Row]) -> String {
     let _ = writeln!(
         s,
         "{:<20} {:>10} {:>10} {:>8}  {:<20} {:<20} {:<6} verdict",
-        "case", "ATE mm", "golden", "tol", "trk/kf/mp/reloc", "golden", "hash"
+        "case", "ATE mm", "golden", "tol", "trk/kf/mp/rel/loop", "golden", "hash"
     );
     for r in rows {
         let (old_ate, tol, old_counts) = match &r.old {
@@ -374,6 +383,7 @@ mod tests {
             keyframes: kf,
             map_points: 1200,
             relocalizations: 0,
+            loops: 0,
             hash: hash.into(),
         }
     }

@@ -54,6 +54,9 @@ pub struct RunRecord {
     /// absent from records written before the column existed).
     #[serde(default)]
     pub synth_seed: Option<u64>,
+    /// Loops closed (empty in records written before loop closing existed).
+    #[serde(default)]
+    pub loops: Option<usize>,
 }
 
 impl RunRecord {
@@ -91,15 +94,18 @@ pub struct FolderSettings {
     pub mapping_lag: u32,
     /// The place-recognition vocabulary (`--vocabulary`): `none` or its name and content hash.
     pub vocabulary: String,
+    /// Whether the runs closed loops (loop closing on and a vocabulary loaded).
+    pub loop_closing: bool,
 }
 
 impl Default for FolderSettings {
-    /// A folder without [`SETTINGS_FILE`]: synchronous runs from before vocabularies existed
-    /// (brute-force relocalization: `none`).
+    /// A folder without [`SETTINGS_FILE`]: synchronous runs from before vocabularies and loop
+    /// closing existed (brute-force relocalization: `none`).
     fn default() -> Self {
         FolderSettings {
             mapping_lag: 0,
             vocabulary: "none".into(),
+            loop_closing: false,
         }
     }
 }
@@ -125,9 +131,17 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
                     .with_context(|| format!("{}: vocabulary is not a string", path.display()))?
                     .to_string(),
             };
+            // Absent: the folder predates loop closing.
+            let loop_closing = match v.get("loop_closing") {
+                None => false,
+                Some(x) => x.as_bool().with_context(|| {
+                    format!("{}: loop_closing is not true or false", path.display())
+                })?,
+            };
             Ok(FolderSettings {
                 mapping_lag,
                 vocabulary,
+                loop_closing,
             })
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(FolderSettings::default()),
@@ -170,11 +184,31 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
                 settings.vocabulary
             );
         }
+        if recorded.loop_closing != settings.loop_closing {
+            let says = |on: bool| {
+                if on {
+                    "loop closing on"
+                } else {
+                    "loop closing off"
+                }
+            };
+            bail!(
+                "{} holds runs made with {}; this sweep has {}: use another --out folder{}",
+                dir.display(),
+                says(recorded.loop_closing),
+                says(settings.loop_closing),
+                if recorded.loop_closing {
+                    ""
+                } else {
+                    " (or --no-loop-closing to add to those runs)"
+                }
+            );
+        }
     }
     let text = format!(
         "# how every run in this folder was made (a sweep with other settings is refused here)\n\
-         mapping_lag = {}\nvocabulary = {:?}\n",
-        settings.mapping_lag, settings.vocabulary
+         mapping_lag = {}\nvocabulary = {:?}\nloop_closing = {}\n",
+        settings.mapping_lag, settings.vocabulary, settings.loop_closing
     );
     ate_eval::io::write_atomic(&path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
@@ -209,6 +243,7 @@ fn header() -> String {
         "fps",
         "wall_s",
         "synth_seed",
+        "loops",
     ])
     .expect("in-memory write");
     String::from_utf8(w.into_inner().expect("in-memory")).expect("ascii")
@@ -257,7 +292,12 @@ impl RunStore {
         let mut done = BTreeSet::new();
         if path.exists() {
             let (records, torn) = read_records(&path)?;
-            if torn {
+            // A record from before a column was added gets the current header (rows re-written
+            // with the new column empty), so appended rows match it.
+            let old_header = std::fs::read_to_string(&path)
+                .map(|t| !t.starts_with(&header()))
+                .unwrap_or(false);
+            if torn || old_header {
                 let mut text = header();
                 for r in &records {
                     text.push_str(&row(r)?);
@@ -361,6 +401,7 @@ mod tests {
             fps: 80.0,
             wall_s: 1.25,
             synth_seed: Some(1),
+            loops: Some(0),
         }
     }
 

@@ -21,9 +21,11 @@ use crate::data::{Features, KeyFrameId, Map, MapPointId, ScaleLevels, TrackedFra
 use crate::feature::{OrbConfig, OrbExtractor};
 use crate::frame::Frame;
 use crate::image::FrameInput;
+use crate::module::global_ba::{apply_global_ba, global_bundle_adjustment, GlobalBaResult};
 use crate::module::keyframe_decision::{need_new_keyframe, KeyFrameDecisionInput, KeyFrameParams};
 use crate::module::keyframe_insertion::create_keyframe;
 use crate::module::local_mapping::{LocalMapper, MappingContext, MappingParams, MappingReport};
+use crate::module::loop_closing::{LoopCloser, LoopClosingParams, LoopContext, LoopEvent};
 use crate::module::pose_estimation::{mcor_frame_gate, renormalized, NoiseHooks};
 use crate::module::relocalization::{relocalize, RelocalizationContext, RelocalizationParams};
 use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
@@ -75,6 +77,9 @@ pub struct Config {
     pub mapping: MappingParams,
     /// Relocalization.
     pub relocalization: RelocalizationParams,
+    /// Loop closing (on by default, as in ORB-SLAM2; needs a vocabulary, see
+    /// [`System::with_vocabulary`]).
+    pub loop_closing: LoopClosingParams,
     /// Keypoints the first frame needs to initialise the map (ORB-SLAM2: more than 500).
     pub init_min_keypoints: usize,
     /// Keypoints with depth the first frame needs (ours: 50; ORB-SLAM2 does not check, and
@@ -102,6 +107,7 @@ impl Default for Config {
             keyframes: KeyFrameParams::default(),
             mapping: MappingParams::default(),
             relocalization: RelocalizationParams::default(),
+            loop_closing: LoopClosingParams::default(),
             init_min_keypoints: 500,
             init_min_depths: 50,
             mcor: None,
@@ -167,6 +173,12 @@ pub struct FrameStats {
     pub keyframe_inserted: bool,
     /// Tracking was recovered by relocalization on this frame.
     pub relocalized: bool,
+    /// Loop closing found a consistent loop candidate at a keyframe mapped on this frame.
+    pub loop_detected: bool,
+    /// A loop was closed (verified and corrected) on this frame.
+    pub loop_closed: bool,
+    /// Loops closed so far.
+    pub n_loops: usize,
     /// Keyframes in the map after the frame.
     pub n_keyframes: usize,
     /// Map points in the map after the frame.
@@ -179,6 +191,8 @@ pub struct FrameStats {
     pub time_mapping_ms: f64,
     /// Local bundle adjustment, milliseconds.
     pub time_ba_ms: f64,
+    /// Loop closing (detection, verification, correction, essential graph, global BA), ms.
+    pub time_loop_ms: f64,
 }
 
 /// What [`System::track`] returns for one frame.
@@ -222,6 +236,9 @@ pub struct System {
     stats: Vec<FrameStats>,
     pending: VecDeque<PendingKeyFrame>,
     place: Option<PlaceRecognition>,
+    loop_closer: LoopCloser,
+    /// A global BA computed after a loop, merged once frame `.0` has been tracked.
+    pending_gba: Option<(u64, GlobalBaResult)>,
 }
 
 /// What local mapping needs of the system (a free function, so that the map and the mapper
@@ -277,6 +294,8 @@ impl System {
             stats: Vec::new(),
             pending: VecDeque::new(),
             place: None,
+            loop_closer: LoopCloser::default(),
+            pending_gba: None,
         }
     }
 
@@ -326,6 +345,11 @@ impl System {
     /// Tracking state after the last frame.
     pub fn state(&self) -> TrackingState {
         self.state
+    }
+
+    /// Every loop closed so far, in order.
+    pub fn loops(&self) -> &[LoopEvent] {
+        &self.loop_closer.loops
     }
 
     /// Statistics of every frame so far.
@@ -392,12 +416,16 @@ impl System {
             n_mcor_rejected_features: 0,
             keyframe_inserted: false,
             relocalized: false,
+            loop_detected: false,
+            loop_closed: false,
+            n_loops: 0,
             n_keyframes: 0,
             n_map_points: 0,
             time_features_ms,
             time_tracking_ms: 0.0,
             time_mapping_ms: 0.0,
             time_ba_ms: 0.0,
+            time_loop_ms: 0.0,
         };
         let mut mapping = MappingReport::default();
         if self.state == TrackingState::NotInitialized {
@@ -411,9 +439,10 @@ impl System {
             }
         } else {
             self.track_frame(&mut cur, &mut stats);
-            // Local mapping of the keyframes due by now (this frame's, when synchronous), before
-            // the frame's pose is stored relative to its reference keyframe's refined pose.
-            mapping = self.map_due_keyframes(cur.id);
+            // Local mapping and loop closing of the keyframes due by now (this frame's, when
+            // synchronous), before the frame's pose is stored relative to its reference
+            // keyframe's refined pose.
+            mapping = self.map_due_keyframes(cur.id, &mut stats);
         }
         self.record(&cur);
         let tcw = if self.state.is_tracked() {
@@ -427,9 +456,12 @@ impl System {
         stats.n_map_points = self.map.map_point_count();
         stats.time_mapping_ms = mapping.time_mapping_ms;
         stats.time_ba_ms = mapping.time_ba_ms;
-        stats.time_tracking_ms =
-            (t1.elapsed().as_secs_f64() * 1e3 - mapping.time_mapping_ms - mapping.time_ba_ms)
-                .max(0.0);
+        stats.n_loops = self.loop_closer.loops.len();
+        stats.time_tracking_ms = (t1.elapsed().as_secs_f64() * 1e3
+            - mapping.time_mapping_ms
+            - mapping.time_ba_ms
+            - stats.time_loop_ms)
+            .max(0.0);
         self.stats.push(stats.clone());
         TrackResult {
             state: self.state,
@@ -615,11 +647,23 @@ impl System {
         }
     }
 
-    /// Runs local mapping for the waiting keyframes whose mapping has completed by the end of
-    /// frame `frame_id` (all of them in the synchronous run), in keyframe order; returns the
-    /// summed report.
-    fn map_due_keyframes(&mut self, frame_id: u64) -> MappingReport {
+    /// Runs local mapping, then loop closing, for the waiting keyframes whose mapping has
+    /// completed by the end of frame `frame_id` (all of them in the synchronous run), in
+    /// keyframe order; merges a global BA that is due. Returns the summed mapping report and
+    /// notes loops in `stats`.
+    fn map_due_keyframes(&mut self, frame_id: u64, stats: &mut FrameStats) -> MappingReport {
         let mut total = MappingReport::default();
+        if self
+            .pending_gba
+            .as_ref()
+            .is_some_and(|(due, _)| *due <= frame_id)
+        {
+            let t = Instant::now();
+            if let Some((_, result)) = self.pending_gba.take() {
+                apply_global_ba(&mut self.map, &result, &self.levels);
+            }
+            stats.time_loop_ms += t.elapsed().as_secs_f64() * 1e3;
+        }
         while self.pending.front().is_some_and(|p| p.due <= frame_id) {
             let Some(p) = self.pending.pop_front() else {
                 break;
@@ -631,8 +675,58 @@ impl System {
             let r = self.mapper.process(p.kf, p.created, &mut self.map, &ctx);
             total.time_mapping_ms += r.time_mapping_ms;
             total.time_ba_ms += r.time_ba_ms;
+            let t = Instant::now();
+            self.close_loops(p.kf, frame_id, stats);
+            stats.time_loop_ms += t.elapsed().as_secs_f64() * 1e3;
         }
         total
+    }
+
+    /// Loop closing for the freshly mapped keyframe `kf`; after a closed loop, the global BA
+    /// is merged at once (synchronous run) or a seeded number of frames later (mapping lag),
+    /// replacing one still pending, as ORB-SLAM2 aborts a running global BA for a new loop.
+    fn close_loops(&mut self, kf: KeyFrameId, frame_id: u64, stats: &mut FrameStats) {
+        let params = &self.config.loop_closing;
+        let Some(place) = self.place.as_ref().filter(|_| params.enabled) else {
+            return;
+        };
+        let ctx = LoopContext {
+            camera: &self.camera,
+            levels: &self.levels,
+            params,
+            pose_cfg: &self.pose_cfg,
+            place,
+        };
+        let report = self
+            .loop_closer
+            .process(kf, &mut self.map, &ctx, &mut self.rng);
+        stats.loop_detected |= report.detected;
+        if report.closed.is_none() {
+            return;
+        }
+        stats.loop_closed = true;
+        self.pending_gba = None;
+        if !params.global_ba {
+            return;
+        }
+        let hooks = NoiseHooks {
+            mcor: self.config.mcor.as_ref(),
+            avc: self.config.avc.as_ref(),
+        };
+        let result = global_bundle_adjustment(
+            &self.map,
+            &self.camera,
+            &self.levels,
+            &hooks,
+            params.global_ba_iterations,
+        );
+        match self.config.mapping_lag {
+            0 => apply_global_ba(&mut self.map, &result, &self.levels),
+            n => {
+                let due = frame_id + self.rng.random_range(1..=u64::from(n));
+                self.pending_gba = Some((due, result));
+            }
+        }
     }
 
     /// Stores the frame's pose relative to its reference keyframe (or repeats the last relative

@@ -3,12 +3,16 @@
 
 use slam_core::{Camera, SensorKind};
 use std::fmt;
+use std::path::Path;
+use std::sync::Arc;
 
+use crate::recorded::RecordedPath;
 use crate::SynthError;
 
-/// Camera path through the room. All run at the camera's frame rate, are smooth (C-infinity),
-/// and move at most a few cm and a few degrees per frame at `motion_scale` 1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Camera path through the room. The built-in paths run at the camera's frame rate, are smooth
+/// (C-infinity), and move at most a few cm and a few degrees per frame at `motion_scale` 1; a
+/// recorded path moves as its recording did.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Trajectory {
     /// Handheld-like translation (+-25 cm) with a gentle look-at wobble, like fr1/fr3 `xyz`.
     Xyz,
@@ -16,18 +20,29 @@ pub enum Trajectory {
     Rpy,
     /// A full 360-degree turn about the vertical in 20 s, from near the middle of the room.
     Spin,
+    /// A closed circuit around the room for loop closing: the camera walks a rounded path
+    /// (an ellipse of 1.6 x 1.5 m semi-axes, 9.8 m round) at hand-held height (1.5 m), looking
+    /// ahead along the path at the walls and furniture, with a gentle hand-held wobble; one
+    /// circuit in [`crate::trajectory::LOOP_PERIOD`] = 40 s.
+    /// The path is periodic: at 40 s the camera is back at its start pose and then re-sees
+    /// the start (render ~45 s = 1350 frames for the circuit plus the revisit).
+    Loop,
+    /// A recorded path: a TUM trajectory file levelled and placed in the room (see
+    /// [`crate::recorded`]); time is the recording's, since its first stamp.
+    Recorded(Arc<RecordedPath>),
 }
 
 impl Trajectory {
-    /// Names accepted by [`Trajectory::from_name`].
-    pub const NAMES: [&'static str; 3] = ["xyz", "rpy", "spin"];
+    /// Names of the built-in paths, accepted by [`Trajectory::from_name`].
+    pub const NAMES: [&'static str; 4] = ["xyz", "rpy", "spin", "loop"];
 
-    /// Parses `xyz`, `rpy` or `spin`.
+    /// Parses a built-in name: `xyz`, `rpy`, `spin` or `loop`.
     pub fn from_name(name: &str) -> Result<Self, SynthError> {
         match name {
             "xyz" => Ok(Trajectory::Xyz),
             "rpy" => Ok(Trajectory::Rpy),
             "spin" => Ok(Trajectory::Spin),
+            "loop" => Ok(Trajectory::Loop),
             _ => Err(SynthError::UnknownName {
                 what: "trajectory",
                 name: name.to_string(),
@@ -36,12 +51,44 @@ impl Trajectory {
         }
     }
 
-    /// The name of the trajectory.
-    pub fn name(&self) -> &'static str {
+    /// Parses a command-line value: a built-in name, else the path of an existing TUM
+    /// trajectory file, read and fitted into the room by [`RecordedPath::load`]. A value that is
+    /// neither fails with the valid names.
+    pub fn from_arg(value: &str) -> Result<Self, SynthError> {
+        if let Ok(t) = Self::from_name(value) {
+            return Ok(t);
+        }
+        let path = Path::new(value);
+        if path.is_file() {
+            return Ok(Trajectory::Recorded(Arc::new(RecordedPath::load(path)?)));
+        }
+        Err(SynthError::UnknownName {
+            what: "trajectory",
+            name: value.to_string(),
+            valid: format!(
+                "{}, or the path of a TUM trajectory file",
+                Self::NAMES.join(", ")
+            ),
+        })
+    }
+
+    /// The built-in path's name, or a recorded path's file name as given.
+    pub fn name(&self) -> &str {
         match self {
             Trajectory::Xyz => "xyz",
             Trajectory::Rpy => "rpy",
             Trajectory::Spin => "spin",
+            Trajectory::Loop => "loop",
+            Trajectory::Recorded(r) => r.label(),
+        }
+    }
+
+    /// How long the path lasts in seconds of trajectory time, `None` for the built-in paths
+    /// (defined for all times).
+    pub fn duration(&self) -> Option<f64> {
+        match self {
+            Trajectory::Recorded(r) => Some(r.duration()),
+            _ => None,
         }
     }
 }
@@ -346,9 +393,14 @@ pub enum Preset {
     Hard,
     /// Kinect with frames 120..150 covered by a featureless surface (relocalisation).
     Occluded,
+    /// Loop closing: the [`Trajectory::Loop`] circuit (40 s round the room, then the start
+    /// re-seen) with sensor errors that make odometry drift before the revisit — the
+    /// `distorted` depth error, stronger. Its default length is the circuit plus the revisit
+    /// ([`Preset::default_frames`]).
+    Loop,
 }
 
-const PRESETS: [(Preset, &str); 9] = [
+const PRESETS: [(Preset, &str); 10] = [
     (Preset::Clean, "clean"),
     (Preset::Kinect, "kinect"),
     (Preset::Boundary, "boundary"),
@@ -358,9 +410,10 @@ const PRESETS: [(Preset, &str); 9] = [
     (Preset::Lag, "lag"),
     (Preset::Hard, "hard"),
     (Preset::Occluded, "occluded"),
+    (Preset::Loop, "loop"),
 ];
 
-const PRESET_NAMES: [&str; 9] = [
+const PRESET_NAMES: [&str; 10] = [
     "clean",
     "kinect",
     "boundary",
@@ -370,6 +423,7 @@ const PRESET_NAMES: [&str; 9] = [
     "lag",
     "hard",
     "occluded",
+    "loop",
 ];
 
 /// Names of all presets, easy to hard.
@@ -460,6 +514,21 @@ impl Preset {
                 occlusion: Some((120, 30)),
                 ..kinect
             },
+            Preset::Loop => {
+                let mut c = kinect;
+                c.trajectory = Trajectory::Loop;
+                c.depth_noise.distortion = Some(SystematicDistortion::default());
+                c
+            }
+        }
+    }
+
+    /// Frames a sequence of this preset has when the user does not say: 300 (10 s at 30 Hz),
+    /// except `loop`: its whole circuit plus 5 s of revisit (45 s, 1350 frames).
+    pub fn default_frames(&self) -> usize {
+        match self {
+            Preset::Loop => 1350,
+            _ => 300,
         }
     }
 }

@@ -111,6 +111,7 @@ pub fn write_contact_sheet(
     rows: usize,
     path: &Path,
 ) -> Result<(), SynthError> {
+    gen.check_frames(n)?;
     let rows = rows.clamp(1, n.max(1));
     let frames: Vec<usize> = (0..rows)
         .map(|r| (r * n.max(1)) / rows + n.max(1) / (2 * rows))

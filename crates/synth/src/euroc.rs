@@ -93,6 +93,7 @@ pub fn write_euroc(
             "the EuRoC layout needs a stereo configuration (use write_tum for RGB-D)".into(),
         ));
     }
+    gen.check_frames(n)?;
     Staging::write_atomically(dir, |tmp| write_into(gen, n, tmp, &progress))
 }
 

@@ -115,7 +115,39 @@ impl Generator {
 
     /// Exact camera-to-world pose at `t` seconds since frame 0.
     pub fn pose_at_time(&self, t: f64) -> Isometry3<f64> {
-        pose_at(self.config.trajectory, t * self.config.motion_scale)
+        pose_at(&self.config.trajectory, t * self.config.motion_scale)
+    }
+
+    /// Checks that frames `0..n` lie within the trajectory: a recorded path lasts only as long
+    /// as its recording, and asking for more frames than it covers is an error naming its
+    /// duration and the largest frame count that fits. Built-in paths never end. (A depth lag
+    /// looks back in time and is clamped to the recording's start.)
+    pub fn check_frames(&self, n: usize) -> Result<(), SynthError> {
+        let Some(duration) = self.config.trajectory.duration() else {
+            return Ok(());
+        };
+        let scale = self.config.motion_scale;
+        let fits = |frames: usize| frames == 0 || self.time(frames - 1) * scale <= duration;
+        if fits(n) {
+            return Ok(());
+        }
+        // The largest count that fits: the estimate from the frame rate, corrected for the
+        // rounding of stamps to whole microseconds (time() is monotone in the index).
+        let rate = self.config.camera.fps / scale.max(1e-300);
+        let mut max = ((duration * rate).floor().min(1e12) as usize).saturating_add(1);
+        while max > 1 && !fits(max) {
+            max -= 1;
+        }
+        while max < n && fits(max + 1) {
+            max += 1;
+        }
+        Err(SynthError::TrajectoryTooShort {
+            trajectory: self.config.trajectory.name().to_string(),
+            duration,
+            frames: n,
+            needed: self.time(n - 1) * scale,
+            max_frames: max,
+        })
     }
 
     /// Exact camera-to-world pose of frame `index`.

@@ -5,7 +5,8 @@
 //! Module map:
 //! - [`config`]: `SynthConfig`, each noise component its own switch, and the named presets;
 //! - [`scene`], [`texture`]: the textured room, its objects and walking "people";
-//! - [`trajectory`]: smooth `xyz`, `rpy` and `spin` camera paths;
+//! - [`trajectory`]: smooth `xyz`, `rpy`, `spin` and `loop` camera paths;
+//! - [`recorded`]: recorded TUM trajectories levelled and placed in the room, interpolated;
 //! - [`render`]: the parallel ray-caster (depth, incidence, ids, anti-aliased colour);
 //! - [`noise`]: the depth-sensor model and image noise;
 //! - [`hash`]: counter-based per-pixel randomness (order- and thread-independent);
@@ -19,6 +20,7 @@ pub mod euroc;
 pub mod generator;
 pub mod hash;
 pub mod noise;
+pub mod recorded;
 pub mod render;
 pub mod scene;
 pub mod texture;
@@ -36,6 +38,7 @@ pub use config::{
 pub use contact::{contact_sheet, write_contact_sheet};
 pub use euroc::write_euroc;
 pub use generator::{Generator, SynthFrame};
+pub use recorded::RecordedPath;
 pub use tum::write_tum;
 
 /// Everything that can go wrong in this crate; file errors name the file.
@@ -69,6 +72,42 @@ pub enum SynthError {
         path: PathBuf,
         /// The cause.
         source: image::ImageError,
+    },
+    /// A malformed line of an input file (a recorded trajectory).
+    #[error("{path}:{line}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with the line.
+        message: String,
+    },
+    /// A recorded trajectory that cannot be placed in the synthetic room (too large, too few
+    /// poses, no down direction).
+    #[error("{path}: {message}")]
+    TrajectoryFit {
+        /// The trajectory file.
+        path: PathBuf,
+        /// Why, with the figures (extents, room size).
+        message: String,
+    },
+    /// More frames asked for than a recorded trajectory covers.
+    #[error(
+        "trajectory {trajectory} lasts {duration:.3} s, but {frames} frames need {needed:.3} s \
+         of it (at this frame rate and motion scale at most {max_frames} frames fit)"
+    )]
+    TrajectoryTooShort {
+        /// The trajectory (a recorded path's file).
+        trajectory: String,
+        /// Its duration, seconds.
+        duration: f64,
+        /// Frames asked for.
+        frames: usize,
+        /// Trajectory time of the last frame asked for, seconds.
+        needed: f64,
+        /// The largest frame count that fits.
+        max_frames: usize,
     },
     /// The output folder exists and is not empty.
     #[error("{0}: output folder exists and is not empty (remove it or choose another)")]

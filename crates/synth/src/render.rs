@@ -263,7 +263,7 @@ mod tests {
             scene: &scene,
             placed: &placed,
             camera: &cam,
-            pose_wc: pose_at(crate::config::Trajectory::Xyz, 0.0),
+            pose_wc: pose_at(&crate::config::Trajectory::Xyz, 0.0),
             occluded: false,
         };
         let render = |s| {

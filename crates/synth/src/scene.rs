@@ -158,6 +158,79 @@ impl Shape {
     }
 }
 
+/// The fixed furniture of the room (shape, centre, yaw): a table with legs and things on it,
+/// a cabinet, boxes, a pillar, a shelf, a bin. The same for every seed (only textures vary).
+fn static_layout() -> Vec<(Shape, [f64; 3], f64)> {
+    let table_top = 0.75;
+    vec![
+        // Table top and legs.
+        cuboid([0.0, 1.0, table_top - 0.025], [0.8, 0.45, 0.025], 0.0),
+        cuboid([-0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
+        cuboid([0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
+        cuboid([-0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
+        cuboid([0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
+        // On the table: boxes, a book, a monitor panel, a bottle and a pot.
+        cuboid([-0.45, 0.9, table_top + 0.10], [0.12, 0.09, 0.10], 0.3),
+        cuboid([0.42, 1.15, table_top + 0.17], [0.15, 0.12, 0.17], -0.4),
+        cuboid([0.05, 0.75, table_top + 0.025], [0.14, 0.10, 0.025], 0.15),
+        cuboid([-0.15, 1.36, table_top + 0.25], [0.3, 0.02, 0.2], 0.0),
+        cylinder(-0.12, 1.1, table_top, 0.045, 0.24),
+        cylinder(0.62, 0.78, table_top, 0.07, 0.18),
+        // On the floor: cabinet, boxes, a pillar, a shelf, a bin.
+        cuboid([-1.6, 1.9, 0.6], [0.45, 0.3, 0.6], 0.0),
+        cuboid([1.45, 1.55, 0.3], [0.3, 0.3, 0.3], 0.5),
+        cuboid([1.45, 1.55, 0.75], [0.2, 0.18, 0.15], 0.2),
+        cylinder(-1.3, 0.3, 0.0, 0.15, 1.8),
+        cuboid([2.0, -1.5, 0.4], [0.35, 0.25, 0.4], 0.2),
+        cuboid([-2.0, -1.2, 0.5], [0.3, 0.4, 0.5], 0.0),
+        cylinder(0.8, -2.0, 0.0, 0.2, 0.6),
+        cuboid([-0.5, -2.25, 0.8], [0.6, 0.2, 0.8], 0.0),
+        cuboid([2.2, 0.4, 1.0], [0.25, 0.6, 1.0], 0.0),
+    ]
+}
+
+/// Signed distance (metres) from a point in the object's local frame to a shape: negative
+/// inside.
+fn shape_sdf(shape: &Shape, l: &Vector3<f64>) -> f64 {
+    match *shape {
+        Shape::Cuboid { half } => {
+            let d = Vector3::new(
+                l.x.abs() - half[0],
+                l.y.abs() - half[1],
+                l.z.abs() - half[2],
+            );
+            let outside = Vector3::new(d.x.max(0.0), d.y.max(0.0), d.z.max(0.0)).norm();
+            outside + d.x.max(d.y).max(d.z).min(0.0)
+        }
+        Shape::Cylinder {
+            radius,
+            half_height,
+        } => {
+            let dr = (l.x * l.x + l.y * l.y).sqrt() - radius;
+            let dz = l.z.abs() - half_height;
+            let outside = (dr.max(0.0).powi(2) + dz.max(0.0).powi(2)).sqrt();
+            outside + dr.max(dz).min(0.0)
+        }
+    }
+}
+
+/// Signed distance (metres) from world point `q` to the nearest piece of the room's fixed
+/// furniture (negative inside one; walls, floor, ceiling and moving objects not counted): how
+/// close a camera placed at `q` would be to an object, used to place recorded paths.
+pub fn furniture_clearance(q: &Vector3<f64>) -> f64 {
+    static LAYOUT: std::sync::OnceLock<Vec<(Shape, [f64; 3], f64)>> = std::sync::OnceLock::new();
+    LAYOUT
+        .get_or_init(static_layout)
+        .iter()
+        .map(|(shape, c, yaw)| {
+            let r = q - Vector3::new(c[0], c[1], c[2]);
+            let (co, si) = (yaw.cos(), yaw.sin());
+            let l = Vector3::new(co * r.x + si * r.y, -si * r.x + co * r.y, r.z);
+            shape_sdf(shape, &l)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 impl Scene {
     /// Builds the room with textures drawn from `seed`, plus `moving` walking objects.
     pub fn new(seed: u64, moving: Option<&MovingObjects>) -> Scene {
@@ -176,32 +249,7 @@ impl Scene {
                 Style::Poster,
             ));
         }
-        let table_top = 0.75;
-        let mut statics = vec![
-            // Table top and legs.
-            cuboid([0.0, 1.0, table_top - 0.025], [0.8, 0.45, 0.025], 0.0),
-            cuboid([-0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
-            cuboid([0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
-            cuboid([-0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
-            cuboid([0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
-            // On the table: boxes, a book, a monitor panel, a bottle and a pot.
-            cuboid([-0.45, 0.9, table_top + 0.10], [0.12, 0.09, 0.10], 0.3),
-            cuboid([0.42, 1.15, table_top + 0.17], [0.15, 0.12, 0.17], -0.4),
-            cuboid([0.05, 0.75, table_top + 0.025], [0.14, 0.10, 0.025], 0.15),
-            cuboid([-0.15, 1.36, table_top + 0.25], [0.3, 0.02, 0.2], 0.0),
-            cylinder(-0.12, 1.1, table_top, 0.045, 0.24),
-            cylinder(0.62, 0.78, table_top, 0.07, 0.18),
-            // On the floor: cabinet, boxes, a pillar, a shelf, a bin.
-            cuboid([-1.6, 1.9, 0.6], [0.45, 0.3, 0.6], 0.0),
-            cuboid([1.45, 1.55, 0.3], [0.3, 0.3, 0.3], 0.5),
-            cuboid([1.45, 1.55, 0.75], [0.2, 0.18, 0.15], 0.2),
-            cylinder(-1.3, 0.3, 0.0, 0.15, 1.8),
-            cuboid([2.0, -1.5, 0.4], [0.35, 0.25, 0.4], 0.2),
-            cuboid([-2.0, -1.2, 0.5], [0.3, 0.4, 0.5], 0.0),
-            cylinder(0.8, -2.0, 0.0, 0.2, 0.6),
-            cuboid([-0.5, -2.25, 0.8], [0.6, 0.2, 0.8], 0.0),
-            cuboid([2.2, 0.4, 1.0], [0.25, 0.6, 1.0], 0.0),
-        ];
+        let mut statics = static_layout();
         let mut objects = Vec::new();
         for (i, (shape, centre, yaw)) in statics.drain(..).enumerate() {
             let (tw, th) = shape.texture_size();
@@ -370,26 +418,7 @@ impl Scene {
             let r = q - p.centre;
             let (c, s) = (p.cos_yaw, p.sin_yaw);
             let l = Vector3::new(c * r.x + s * r.y, -s * r.x + c * r.y, r.z);
-            let sdf = match self.objects[p.object].shape {
-                Shape::Cuboid { half } => {
-                    let d = Vector3::new(
-                        l.x.abs() - half[0],
-                        l.y.abs() - half[1],
-                        l.z.abs() - half[2],
-                    );
-                    let outside = Vector3::new(d.x.max(0.0), d.y.max(0.0), d.z.max(0.0)).norm();
-                    outside + d.x.max(d.y).max(d.z).min(0.0)
-                }
-                Shape::Cylinder {
-                    radius,
-                    half_height,
-                } => {
-                    let dr = (l.x * l.x + l.y * l.y).sqrt() - radius;
-                    let dz = l.z.abs() - half_height;
-                    let outside = (dr.max(0.0).powi(2) + dz.max(0.0).powi(2)).sqrt();
-                    outside + dr.max(dz).min(0.0)
-                }
-            };
+            let sdf = shape_sdf(&self.objects[p.object].shape, &l);
             best = best.min(sdf.abs());
         }
         best
@@ -565,5 +594,18 @@ mod tests {
                 assert_eq!(moved, 0.0);
             }
         }
+    }
+
+    #[test]
+    fn furniture_clearance_is_signed_and_agrees_with_the_scene() {
+        // Inside the pillar, on the table top, in free space.
+        assert!(furniture_clearance(&Vector3::new(-1.3, 0.3, 1.0)) < -0.1);
+        assert!(furniture_clearance(&Vector3::new(0.0, 1.0, 0.75)).abs() < 1e-12);
+        let q = Vector3::new(0.0, -0.5, 1.4);
+        let c = furniture_clearance(&q);
+        assert!(c > 0.3, "{c}");
+        // Free space: never further from furniture than from the nearest surface at all.
+        let scene = Scene::new(2, None);
+        assert!(scene.surface_distance(&scene.place(0.0), &q) <= c + 1e-12);
     }
 }

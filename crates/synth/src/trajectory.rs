@@ -1,5 +1,6 @@
 //! Smooth ground-truth camera trajectories (camera-to-world poses as functions of time):
-//! handheld-like `xyz`, rotation-heavy `rpy` and a 360-degree `spin`. Camera convention as in
+//! handheld-like `xyz`, rotation-heavy `rpy`, a 360-degree `spin`, a closed `loop` around the
+//! room, and recorded paths (sampled by [`crate::recorded`]). Camera convention as in
 //! TUM / ORB-SLAM2: x right, y down, z forward.
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
@@ -21,9 +22,56 @@ fn wobble(t: f64, amp: f64, periods: [f64; 2], phase: f64) -> f64 {
         + 0.3 * (TAU * t / periods[1] + 1.7 * phase).sin())
 }
 
-/// Camera-to-world pose of `trajectory` at time `t` seconds (already scaled by the motion scale).
-pub fn pose_at(trajectory: Trajectory, t: f64) -> Isometry3<f64> {
+/// Seconds of one circuit of [`Trajectory::Loop`] (at motion scale 1); the path is periodic.
+pub const LOOP_PERIOD: f64 = 40.0;
+
+/// Centre of the `loop` ellipse in the floor plane, metres: off the room centre so that the
+/// path keeps clear of the pillar at (-1.3, 0.3), the shelf at x = 1.95 and the cabinet.
+const LOOP_CENTRE: [f64; 2] = [-0.25, 0.1];
+/// Semi-axes of the `loop` ellipse along x and y, metres.
+const LOOP_SEMI_AXES: [f64; 2] = [1.6, 1.5];
+/// Mean camera height of the `loop`, metres (hand-held, above the cabinet and the monitor).
+const LOOP_HEIGHT: f64 = 1.5;
+/// Angle on the ellipse where the `loop` starts (and, each period, ends), radians.
+const LOOP_START: f64 = -2.4;
+
+/// A harmonic of the loop frequency: periodic in [`LOOP_PERIOD`], so the wobble returns with
+/// the camera.
+fn harmonic(t: f64, k: f64, amp: f64, phase: f64) -> f64 {
+    amp * (std::f64::consts::TAU * k * t / LOOP_PERIOD + phase).sin()
+}
+
+/// The `loop` pose: eye on the ellipse (counter-clockwise seen from above), looking ahead
+/// along the path (the ellipse's radial angle plus 90 degrees) and slightly down at the walls
+/// and furniture in front, with hand-held wobble of a few cm and a few degrees.
+fn loop_pose(t: f64) -> (Vector3<f64>, Rotation3<f64>) {
+    let angle = LOOP_START + std::f64::consts::TAU * t / LOOP_PERIOD;
+    let eye = Vector3::new(
+        LOOP_CENTRE[0] + LOOP_SEMI_AXES[0] * angle.cos() + harmonic(t, 3.0, 0.04, 0.4),
+        LOOP_CENTRE[1] + LOOP_SEMI_AXES[1] * angle.sin() + harmonic(t, 5.0, 0.03, 1.3),
+        LOOP_HEIGHT + harmonic(t, 4.0, 0.04, 2.1) + harmonic(t, 9.0, 0.015, 0.2),
+    );
+    let heading = angle
+        + std::f64::consts::FRAC_PI_2
+        + harmonic(t, 3.0, 8f64.to_radians(), 2.6)
+        + harmonic(t, 7.0, 3f64.to_radians(), 0.9);
+    let pitch = -0.2 + harmonic(t, 5.0, 4f64.to_radians(), 1.7);
+    let roll = harmonic(t, 6.0, 3f64.to_radians(), 0.5) + harmonic(t, 11.0, 1f64.to_radians(), 2.9);
+    let dir = Vector3::new(
+        heading.cos() * pitch.cos(),
+        heading.sin() * pitch.cos(),
+        pitch.sin(),
+    );
+    let rot = look_at(&eye, &(eye + dir)) * Rotation3::from_axis_angle(&Vector3::z_axis(), roll);
+    (eye, rot)
+}
+
+/// Camera-to-world pose of `trajectory` at time `t` seconds (already scaled by the motion
+/// scale). A recorded path is clamped to its recording outside it.
+pub fn pose_at(trajectory: &Trajectory, t: f64) -> Isometry3<f64> {
     let (eye, rot) = match trajectory {
+        Trajectory::Recorded(path) => return path.pose_at(t),
+        Trajectory::Loop => loop_pose(t),
         Trajectory::Xyz => {
             let eye = Vector3::new(
                 wobble(t, 0.28, [7.3, 3.1], 0.0),
@@ -82,11 +130,16 @@ mod tests {
 
     #[test]
     fn trajectories_are_smooth_and_stay_in_the_room() {
-        for traj in [Trajectory::Xyz, Trajectory::Rpy, Trajectory::Spin] {
-            let mut prev = pose_at(traj, 0.0);
+        for traj in [
+            Trajectory::Xyz,
+            Trajectory::Rpy,
+            Trajectory::Spin,
+            Trajectory::Loop,
+        ] {
+            let mut prev = pose_at(&traj, 0.0);
             let (mut max_dt, mut max_dr) = (0.0f64, 0.0f64);
             for i in 1..1800 {
-                let p = pose_at(traj, i as f64 / 30.0);
+                let p = pose_at(&traj, i as f64 / 30.0);
                 let d = prev.inverse() * p;
                 max_dt = max_dt.max(d.translation.vector.norm());
                 max_dr = max_dr.max(d.rotation.angle());
@@ -104,6 +157,35 @@ mod tests {
             // It does move.
             assert!(max_dt > 0.001 || max_dr > 0.2f64.to_radians(), "{traj:?}");
         }
+    }
+
+    #[test]
+    fn loop_returns_to_its_start_after_a_long_excursion() {
+        let start = pose_at(&Trajectory::Loop, 0.0);
+        let back = pose_at(&Trajectory::Loop, LOOP_PERIOD);
+        let d = start.inverse() * back;
+        assert!(d.translation.vector.norm() < 1e-9 && d.rotation.angle() < 1e-9);
+        // Far from the start half-way, and it looks at every wall on the way round.
+        let half = pose_at(&Trajectory::Loop, LOOP_PERIOD / 2.0);
+        assert!((half.translation.vector - start.translation.vector).norm() > 2.0);
+        let mut turned = 0.0;
+        let mut prev = start.rotation * Vector3::z();
+        for i in 1..=400 {
+            let z =
+                pose_at(&Trajectory::Loop, LOOP_PERIOD * i as f64 / 400.0).rotation * Vector3::z();
+            let (a, b) = (prev.xy(), z.xy());
+            turned += (a.x * b.y - a.y * b.x).atan2(a.dot(&b));
+            prev = z;
+        }
+        assert!((turned - std::f64::consts::TAU).abs() < 1e-6, "{turned}");
+        // Never closer than 0.3 m to the furniture.
+        let clear = (0..2400)
+            .map(|i| {
+                let p = pose_at(&Trajectory::Loop, LOOP_PERIOD * i as f64 / 2400.0);
+                crate::scene::furniture_clearance(&p.translation.vector)
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(clear > 0.3, "{clear} m from the furniture");
     }
 
     #[test]

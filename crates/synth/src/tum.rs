@@ -37,7 +37,8 @@ pub fn pose_line(timestamp: f64, pose: &Isometry3<f64>) -> String {
 /// Writes frames 0..n of `gen` (an RGB-D generator) into `dir` in the TUM RGB-D layout.
 /// Frames are generated and encoded in parallel; `progress(k)` is called with the number of
 /// frames written so far. Everything goes to a staging folder renamed to `dir` at the end;
-/// `dir` must not exist or be empty.
+/// `dir` must not exist or be empty; frames beyond a recorded trajectory are refused first
+/// ([`Generator::check_frames`]).
 pub fn write_tum(
     gen: &Generator,
     n: usize,
@@ -49,6 +50,7 @@ pub fn write_tum(
             "the TUM layout needs an RGB-D configuration (use write_euroc for stereo)".into(),
         ));
     }
+    gen.check_frames(n)?;
     Staging::write_atomically(dir, |tmp| write_into(gen, n, tmp, &progress))
 }
 

@@ -20,8 +20,12 @@ fn clean_with(noise: DepthNoise) -> SynthConfig {
 fn noiseless_depth_backprojects_onto_the_scene_sub_mm() {
     let mut cfg = SynthConfig::preset("clean").unwrap();
     cfg.moving_objects = Some(MovingObjects::default());
-    for traj in [synth::Trajectory::Xyz, synth::Trajectory::Spin] {
-        cfg.trajectory = traj;
+    for traj in [
+        synth::Trajectory::Xyz,
+        synth::Trajectory::Spin,
+        synth::Trajectory::Loop,
+    ] {
+        cfg.trajectory = traj.clone();
         let gen = Generator::new(cfg.clone(), 5);
         let cam = gen.camera();
         for i in [0usize, 77, 211] {
@@ -230,9 +234,10 @@ fn images_have_many_well_spread_fast_corners() {
         ("kinect", synth::Trajectory::Spin),
         ("kinect", synth::Trajectory::Rpy),
         ("stereo", synth::Trajectory::Xyz),
+        ("loop", synth::Trajectory::Loop),
     ] {
         let mut cfg = SynthConfig::preset(preset).unwrap();
-        cfg.trajectory = traj;
+        cfg.trajectory = traj.clone();
         let gen = Generator::new(cfg, 4);
         for i in [0usize, 150] {
             let f = gen.frame(i);

@@ -13,9 +13,10 @@ fn orb_finds_1000_spread_keypoints_that_match_across_frames() {
         ("kinect", Trajectory::Xyz),
         ("walking", Trajectory::Rpy),
         ("kinect", Trajectory::Spin),
+        ("loop", Trajectory::Loop),
     ] {
         let mut cfg = SynthConfig::preset(preset).unwrap();
-        cfg.trajectory = traj;
+        cfg.trajectory = traj.clone();
         let gen = Generator::new(cfg, 7);
         let cam = gen.camera();
         let mut orb = OrbExtractor::new(OrbConfig::default());

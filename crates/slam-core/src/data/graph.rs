@@ -60,12 +60,12 @@ impl Map {
         }
     }
 
-    /// Culls a keyframe (never the first one): drops its edges and observations (points left
+    /// Culls a keyframe (never the first one, nor one with loop edges): drops its edges and observations (points left
     /// with too few observations are culled too), hands its children to the best-connected
     /// keyframe among its parent and already re-attached siblings, and stores its pose relative
     /// to its parent for the trajectory.
     pub fn set_keyframe_bad(&mut self, kf: KeyFrameId) {
-        if kf.0 == 0 || self.keyframe(kf).is_none() {
+        if kf.0 == 0 || self.keyframe(kf).is_none_or(|k| !k.loop_edges.is_empty()) {
             return;
         }
         let connections: Vec<KeyFrameId> = self.keyframe_any_mut(kf).covisibles();

@@ -49,6 +49,9 @@ pub struct KeyFrame {
     pub fuse_target_for_kf: u32,
     /// BoW vector and direct index (when the system has a vocabulary).
     pub bow: Option<Arc<crate::place::FrameBow>>,
+    /// Keyframes a closed loop linked to this one: edges of the essential graph, and the
+    /// reason this keyframe is never culled (ORB-SLAM2's loop edges and `mbNotErase`).
+    pub loop_edges: BTreeSet<KeyFrameId>,
 }
 
 impl KeyFrame {
@@ -79,6 +82,7 @@ impl KeyFrame {
             ba_fixed_for_kf: 0,
             fuse_target_for_kf: 0,
             bow: None,
+            loop_edges: BTreeSet::new(),
         }
     }
 

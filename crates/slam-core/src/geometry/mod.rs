@@ -16,7 +16,7 @@
 mod se3;
 mod so3;
 
-pub use se3::{d_point_d_left_perturbation, exp_se3, log_se3};
+pub use se3::{d_point_d_left_perturbation, exp_se3, log_se3, so3_left_jacobian_inverse};
 pub use so3::{exp_so3, log_so3, skew};
 
 /// A 6-vector of f64: an element of se(3) as `[omega; upsilon]` (rotation first).

@@ -23,9 +23,11 @@ fn so3_left_jacobian(w: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::identity() + wx * a + wx * wx * b
 }
 
-/// Inverse of [`so3_left_jacobian`]:
-/// `V^-1 = I - W/2 + (1 - (t/2) cot(t/2)) / t^2 W^2`.
-fn so3_left_jacobian_inverse(w: &Vector3<f64>) -> Matrix3<f64> {
+/// Inverse of the SO(3) left Jacobian `V(w)`:
+/// `V^-1 = I - W/2 + (1 - (t/2) cot(t/2)) / t^2 W^2`. Besides inverting [`exp_se3`]'s
+/// translation, it is the derivative of `log_so3(exp(d) R)` with respect to `d` at `d = 0`
+/// (and `V^-1(-w)` that of `log_so3(R exp(d))`), which pose-graph Jacobians need.
+pub fn so3_left_jacobian_inverse(w: &Vector3<f64>) -> Matrix3<f64> {
     let t2 = w.norm_squared();
     let c = if t2.sqrt() < SMALL_ANGLE {
         1.0 / 12.0 + t2 / 720.0

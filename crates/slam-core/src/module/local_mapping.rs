@@ -540,7 +540,7 @@ fn keyframe_culling(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usiz
         if candidate.0 == 0 {
             continue;
         }
-        let Some(c) = map.keyframe(candidate) else {
+        let Some(c) = map.keyframe(candidate).filter(|c| c.loop_edges.is_empty()) else {
             continue;
         };
         let (mut n_points, mut n_redundant) = (0usize, 0usize);

@@ -2,11 +2,15 @@
 //! optimization of a frame, with the MC-OR / AVC hook points), [`tracking`] (motion model,
 //! reference keyframe, local map), [`keyframe_decision`] and [`keyframe_insertion`] (when and how a
 //! frame becomes a keyframe), [`local_mapping`] (new points, fusion, culling, local BA) and
-//! [`relocalization`]. [`noise`] holds the parameters of the paper's two techniques.
+//! [`relocalization`], [`loop_closing`] with its [`essential_graph`] and [`global_ba`]. [`noise`]
+//! holds the parameters of the paper's two techniques.
 
+pub mod essential_graph;
+pub mod global_ba;
 pub mod keyframe_decision;
 pub mod keyframe_insertion;
 pub mod local_mapping;
+pub mod loop_closing;
 pub mod noise;
 pub mod pose_estimation;
 pub mod relocalization;

@@ -236,6 +236,16 @@ pub fn tap_pose_optimizations<R>(f: impl FnOnce() -> R) -> (R, Vec<PoseOptRecord
     (r, records)
 }
 
+/// Runs `f` with the analysis tap of this thread (if any) suspended: optimizations that are not
+/// the tracking of the frame, such as loop verification, stay out of the frame's record.
+pub(crate) fn without_tap<R>(f: impl FnOnce() -> R) -> R {
+    let outer = POSE_OPT_TAP.with(|t| t.borrow_mut().take());
+    let guard = TapGuard(outer);
+    let r = f();
+    drop(guard);
+    r
+}
+
 fn tap_active() -> bool {
     POSE_OPT_TAP.with(|t| t.borrow().is_some())
 }

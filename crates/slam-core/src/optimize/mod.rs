@@ -1,5 +1,6 @@
 //! Nonlinear least squares for tracking and mapping: reprojection residuals as plain data,
-//! pose-only optimization with chi2 outlier rounds, and sparse local bundle adjustment, both
+//! pose-only optimization with chi2 outlier rounds, sparse (local or global) bundle adjustment and
+//! SE(3) pose-graph optimization for loop closing, all
 //! driven by one Levenberg-Marquardt loop with g2o's damping schedule (what ORB-SLAM2 runs).
 //!
 //! Poses follow the convention of [`crate::geometry`]: `Tcw`, left perturbation
@@ -7,10 +8,12 @@
 //! coordinates ([`Measurement`]), so a new residual such as the paper's 4-D AVC term plugs in
 //! through [`CameraResidual`] without touching the solvers.
 
+mod envelope;
 mod lm;
 mod local_ba;
 #[cfg(test)]
 pub(crate) mod numdiff;
+mod pose_graph;
 mod pose_only;
 mod residual;
 mod robust;
@@ -20,6 +23,7 @@ pub(crate) mod test_scene;
 pub use local_ba::{
     local_bundle_adjustment, BaConfig, BaKeyFrame, BaObservation, BaPoint, BaProblem, BaReport,
 };
+pub use pose_graph::{optimize_pose_graph, PoseGraph, PoseGraphEdge, PoseGraphReport};
 pub use pose_only::{
     pose_optimization, pose_optimization_with, BetweenRounds, PoseObservation, PoseOptConfig,
     PoseOptResult,

@@ -125,12 +125,47 @@ impl KeyFrameDatabase {
         let scored = Self::scored_candidates(&shared, bow, bow_of, |_| true);
         group_best(&scored, best_covisible)
     }
+
+    /// Loop candidates for keyframe `kf` with BoW vector `bow` (ORB-SLAM2's
+    /// `DetectLoopCandidates`): keyframes other than `kf` and not `connected` to it that share
+    /// enough words are scored; those scoring at least `min_score` seed a group whose score is
+    /// accumulated over the seed's best covisible keyframes that share enough words (whatever
+    /// their score), and the best keyframe of every group within [`MIN_ACC_SCORE_RATIO`] of the
+    /// best group is returned, best first (ties by id).
+    pub fn loop_candidates<'a>(
+        &self,
+        kf: KeyFrameId,
+        bow: &BowVector,
+        min_score: f64,
+        connected: impl Fn(KeyFrameId) -> bool,
+        bow_of: impl Fn(KeyFrameId) -> Option<&'a BowVector>,
+        best_covisible: impl Fn(KeyFrameId, usize) -> Vec<KeyFrameId>,
+    ) -> Vec<KeyFrameId> {
+        let shared = self.shared_words(bow);
+        let scored = Self::scored_candidates(&shared, bow, bow_of, |k| k != kf && !connected(k));
+        let seeds: Vec<Candidate> = scored
+            .iter()
+            .filter(|c| c.score >= min_score)
+            .copied()
+            .collect();
+        group_best_of(&seeds, &scored, best_covisible)
+    }
 }
 
 /// Accumulates each candidate's score over its best covisible keyframes that are candidates too
 /// and returns the best keyframe of every group within [`MIN_ACC_SCORE_RATIO`] of the best
 /// accumulated score, best first (ties by id), each keyframe once.
 pub fn group_best(
+    scored: &[Candidate],
+    best_covisible: impl Fn(KeyFrameId, usize) -> Vec<KeyFrameId>,
+) -> Vec<KeyFrameId> {
+    group_best_of(scored, scored, best_covisible)
+}
+
+/// [`group_best`] where only `seeds` start groups and `scored` (sorted by id, a superset of
+/// `seeds`) gives the scores of the neighbours accumulated into them.
+pub fn group_best_of(
+    seeds: &[Candidate],
     scored: &[Candidate],
     best_covisible: impl Fn(KeyFrameId, usize) -> Vec<KeyFrameId>,
 ) -> Vec<KeyFrameId> {
@@ -141,7 +176,7 @@ pub fn group_best(
             .map(|i| scored[i].score)
     };
     debug_assert!(scored.windows(2).all(|w| w[0].keyframe < w[1].keyframe));
-    let mut groups: Vec<(f64, KeyFrameId)> = scored
+    let mut groups: Vec<(f64, KeyFrameId)> = seeds
         .iter()
         .map(|c| {
             let mut acc = c.score;
