@@ -60,10 +60,47 @@ pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
         t.remove("vocabulary");
     }
     let mut value = toml::Value::try_from(base).context("serialising the default configuration")?;
-    merge(&mut value, over);
-    value
+    merge(&mut value, over.clone());
+    let config: Config = value
         .try_into()
-        .with_context(|| format!("{}: not a valid noisefree configuration", path.display()))
+        .with_context(|| format!("{}: not a valid noisefree configuration", path.display()))?;
+    // serde ignores fields it does not know: a misspelt key would silently keep the default.
+    // Every key of the file must survive a round trip through the configuration.
+    let known = toml::Value::try_from(&config).context("serialising the configuration")?;
+    let mut unknown = Vec::new();
+    unknown_keys(&over, &known, "", &mut unknown);
+    if !unknown.is_empty() {
+        anyhow::bail!(
+            "{}: unknown setting{} {} (see the fields of slam_core::system::Config)",
+            path.display(),
+            if unknown.len() == 1 { "" } else { "s" },
+            unknown
+                .iter()
+                .map(|k| format!("`{k}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(config)
+}
+
+/// Dotted paths of the keys of `file` that `known` (the parsed configuration, serialised
+/// again) does not have.
+fn unknown_keys(file: &toml::Value, known: &toml::Value, prefix: &str, out: &mut Vec<String>) {
+    let (toml::Value::Table(f), toml::Value::Table(k)) = (file, known) else {
+        return;
+    };
+    for (key, v) in f {
+        let path = if prefix.is_empty() {
+            key.clone()
+        } else {
+            format!("{prefix}.{key}")
+        };
+        match k.get(key) {
+            Some(kv) => unknown_keys(v, kv, &path, out),
+            None => out.push(path),
+        }
+    }
 }
 
 /// Switches of the command line applied on top of a configuration.
@@ -103,5 +140,54 @@ pub fn config_name(c: &Config) -> &'static str {
         (true, false) => "mcor",
         (false, true) => "avc",
         (true, true) => "mcor+avc",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("nf-config-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(format!("{name}.toml"));
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn every_field_of_a_full_configuration_is_accepted() {
+        let c = Config {
+            mcor: Some(McorParams::default()),
+            avc: Some(AvcParams::default()),
+            ..Config::default()
+        };
+        let p = file("full", &toml::to_string(&c).unwrap());
+        let read = overlay_file(&Config::default(), &p).unwrap();
+        assert_eq!(config_name(&read), "mcor+avc");
+    }
+
+    #[test]
+    fn a_subset_overlays_the_defaults() {
+        let p = file(
+            "subset",
+            "mapping_lag = 2\n[loop_closing]\nenabled = false\n",
+        );
+        let c = overlay_file(&Config::default(), &p).unwrap();
+        assert_eq!(c.mapping_lag, 2);
+        assert!(!c.loop_closing.enabled);
+        assert_eq!(
+            c.loop_closing.consistency,
+            Config::default().loop_closing.consistency
+        );
+    }
+
+    #[test]
+    fn misspelt_keys_are_refused_by_name() {
+        let p = file("typo", "mapping_lagg = 2\n[loop_closing]\nenabld = false\n");
+        let e = format!("{:#}", overlay_file(&Config::default(), &p).unwrap_err());
+        assert!(e.contains("typo.toml"), "{e}");
+        assert!(e.contains("`mapping_lagg`"), "{e}");
+        assert!(e.contains("`loop_closing.enabld`"), "{e}");
     }
 }

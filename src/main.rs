@@ -37,6 +37,8 @@ enum Command {
     Analyze(commands::analyze::AnalyzeArgs),
     /// ATE / RPE of an estimated trajectory against ground truth (like evo_ape / evaluate_ate.py).
     Eval(commands::eval::EvalArgs),
+    /// Top view of estimated trajectories aligned to and drawn over the ground truth (PNG + SVG).
+    Plot(commands::plot::PlotArgs),
     /// Generate a synthetic RGB-D or stereo sequence (TUM or EuRoC layout) with exact ground truth.
     Synth(commands::synth::SynthArgs),
     /// Download and unpack catalogued sequences (datasets.toml) into the data directory.
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
         Command::Sweep(a) => commands::sweep::run(a),
         Command::Table(a) => commands::table::run(a),
         Command::Analyze(a) => commands::analyze::run(a),
+        Command::Plot(a) => commands::plot::run(a),
         Command::Eval(a) => commands::eval::run(a),
         Command::Synth(a) => commands::synth::run(a),
         Command::Fetch(a) => commands::fetch::run(a),

@@ -50,6 +50,28 @@ pub struct ClosedLoop {
     pub timestamp: f64,
     /// The keyframes involved and the size of the correction.
     pub event: LoopEvent,
+    /// Capture times of the closing keyframe and of the keyframe it was matched to, seconds.
+    pub keyframe_stamps: (f64, f64),
+    /// With ground truth: how far apart the two keyframes' true poses are (metres, degrees;
+    /// body frame for EuRoC). A true loop joins views of one place; a false one, far apart
+    /// or looking elsewhere.
+    pub truth: Option<(f64, f64)>,
+}
+
+/// The ground-truth pose nearest to `stamp` (within 0.02 s, evaluate_ate.py's window).
+fn truth_at(gt: &Trajectory, stamp: f64) -> Option<nalgebra::Isometry3<f64>> {
+    let i = gt.stamps.partition_point(|&s| s < stamp);
+    [i.checked_sub(1), Some(i)]
+        .into_iter()
+        .flatten()
+        .filter(|&k| k < gt.stamps.len())
+        .min_by(|&a, &b| {
+            (gt.stamps[a] - stamp)
+                .abs()
+                .total_cmp(&(gt.stamps[b] - stamp).abs())
+        })
+        .filter(|&k| (gt.stamps[k] - stamp).abs() < 0.02)
+        .map(|k| gt.poses[k])
 }
 
 impl RunOutcome {
@@ -99,10 +121,29 @@ pub fn run_sequence(
     let closing_frames = stats.iter().enumerate().filter(|(_, s)| s.loop_closed);
     let loops: Vec<ClosedLoop> = closing_frames
         .zip(system.loops())
-        .map(|((frame, s), event)| ClosedLoop {
-            frame,
-            timestamp: s.timestamp,
-            event: event.clone(),
+        .map(|((frame, s), event)| {
+            let stamp = |k| {
+                system
+                    .map()
+                    .keyframe_any(k)
+                    .map_or(f64::NAN, |kf| kf.timestamp)
+            };
+            let keyframe_stamps = (stamp(event.current), stamp(event.loop_kf));
+            let truth = seq.groundtruth.as_ref().and_then(|gt| {
+                let a = truth_at(gt, keyframe_stamps.0)?;
+                let b = truth_at(gt, keyframe_stamps.1)?;
+                Some((
+                    (a.translation.vector - b.translation.vector).norm(),
+                    a.rotation.angle_to(&b.rotation).to_degrees(),
+                ))
+            });
+            ClosedLoop {
+                frame,
+                timestamp: s.timestamp,
+                event: event.clone(),
+                keyframe_stamps,
+                truth,
+            }
         })
         .collect();
     let mut trajectory = Trajectory::new();

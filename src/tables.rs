@@ -353,6 +353,47 @@ pub fn table4(records: &[RunRecord], catalog: &Catalog) -> Rendered {
     )
 }
 
+/// Loops closed per sequence and configuration: the total over the runs and in how many runs
+/// at least one closed, so a false loop on a sequence without a revisit shows at a glance.
+/// `None` when no run recorded a loop count (loop closing off, or records from before it).
+pub fn loops_table(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {
+    if !records.iter().any(|r| r.loops.is_some()) {
+        return None;
+    }
+    let kinds: Vec<ConfigKind> = ConfigKind::ALL
+        .into_iter()
+        .filter(|k| records.iter().any(|r| r.config == k.name()))
+        .collect();
+    let mut header = vec!["sequence".to_string()];
+    header.extend(kinds.iter().map(|k| column_name(*k).to_string()));
+    let mut rows = Vec::new();
+    for seq in sequence_order(records, catalog) {
+        let mut row = vec![seq.clone()];
+        for k in &kinds {
+            let runs: Vec<&RunRecord> = records
+                .iter()
+                .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
+                .collect();
+            let counted: Vec<usize> = runs.iter().filter_map(|r| r.loops).collect();
+            row.push(if counted.is_empty() {
+                "-".into()
+            } else {
+                let total: usize = counted.iter().sum();
+                let with = counted.iter().filter(|&&n| n > 0).count();
+                format!("{total} ({with}/{} runs)", counted.len())
+            });
+        }
+        rows.push(row);
+    }
+    Some(render(
+        "Loops closed",
+        "Loops closed in all runs together, and in how many runs at least one closed. On a \
+         sequence that never returns to a place it has seen, every loop is a false one.",
+        &header,
+        &rows,
+    ))
+}
+
 /// The MC-OR threshold grid: mean ATE per (tau_MF, tau_GF, tau_MG) and sequence, the best triple
 /// per sequence and overall (lowest mean over sequences of the per-sequence mean ATE).
 pub fn threshold_grid(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {

@@ -221,3 +221,51 @@ fn too_few_pairs_rejected() {
         "only 2 pose pairs",
     );
 }
+
+#[test]
+fn plot_draws_aligned_estimates_with_their_ate_and_refuses_missing_files() {
+    let eval = noisefree(&["eval", &fixture("gt.txt"), &fixture("est.txt")]);
+    let eval_text = String::from_utf8_lossy(&eval.stdout).into_owned();
+    let stem = std::env::temp_dir()
+        .join(format!("noisefree-plot-cli-{}", std::process::id()))
+        .join("fig");
+    let labelled = format!("{}=my estimate", fixture("est.txt"));
+    let out = noisefree(&[
+        "plot",
+        &fixture("gt.txt"),
+        &labelled,
+        "--out",
+        stem.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The same alignment and ATE as `eval` prints (its RMSE to 4 decimals).
+    let rmse = text
+        .split("ATE RMSE ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap()
+        .to_string();
+    assert!(text.starts_with("my estimate: ATE RMSE"), "{text}");
+    assert!(eval_text.contains(&rmse[..5]), "{eval_text} vs {text}");
+    for ext in ["png", "svg"] {
+        let p = stem.with_extension(ext);
+        assert!(
+            std::fs::metadata(&p).unwrap().len() > 1000,
+            "{}",
+            p.display()
+        );
+    }
+    let o = noisefree(&[
+        "plot",
+        &fixture("gt.txt"),
+        "/no/such/estimate.txt",
+        "--out",
+        stem.to_str().unwrap(),
+    ]);
+    assert_clean_failure(&o, "/no/such/estimate.txt");
+}

@@ -121,6 +121,13 @@ fn sweep_resume_shards_and_table() {
         "{t_full}"
     );
     assert!(full.join("table3.csv").exists() && full.join("table4.md").exists());
+    // No revisit in 40 frames: the loops table says no run closed a loop.
+    let loops = std::fs::read_to_string(full.join("loops.md")).unwrap();
+    assert!(
+        loops.contains("| clean | 0 (0/3 runs) | 0 (0/3 runs) |")
+            && loops.contains("| kinect | 0 (0/3 runs) | 0 (0/3 runs) |"),
+        "{loops}"
+    );
 }
 
 #[test]

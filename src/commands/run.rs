@@ -99,8 +99,11 @@ pub fn run_summary(label: &str, config: &str, seed: u64, o: &RunOutcome) -> serd
         "loops": o.loops.iter().map(|l| json!({
             "frame": l.frame, "timestamp": l.timestamp,
             "keyframe": l.event.current.0, "loop_keyframe": l.event.loop_kf.0,
+            "keyframe_timestamp": l.keyframe_stamps.0,
+            "loop_keyframe_timestamp": l.keyframe_stamps.1,
             "matches": l.event.matches,
             "correction_m": l.event.correction_m, "correction_deg": l.event.correction_deg,
+            "true_distance_m": l.truth.map(|t| t.0), "true_angle_deg": l.truth.map(|t| t.1),
         })).collect::<Vec<_>>(),
         "mean_inliers": mi, "mean_outliers": mo,
         "wall_s": o.wall_s, "fps": o.fps(),

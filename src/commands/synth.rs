@@ -20,12 +20,12 @@ pub struct SynthArgs {
     /// moving people), stereo (EuRoC-like pair, no depth), distorted (4 % depth scale + radial
     /// wobble), lag (2-frame depth lag, fast motion), hard (walking + distorted + lag),
     /// occluded (lens covered for frames 120..150), loop (a 40 s circuit round the room back to
-    /// its start and 5 s past it, with a depth error that makes odometry drift: for loop
+    /// its start and 15 s past it, with a depth error that makes odometry drift: for loop
     /// closing).
     #[arg(long, default_value = "kinect")]
     pub preset: String,
     /// Number of frames to write (30 Hz, so 300 frames = 10 s). Default: the preset's, 300
-    /// (1350 for loop: its circuit plus the revisit).
+    /// (1650 for loop: its circuit plus 15 s of revisit).
     #[arg(long)]
     pub frames: Option<usize>,
     /// Seed of the scene textures and of every noise draw.

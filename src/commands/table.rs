@@ -3,7 +3,7 @@
 
 use crate::commands::sweep::is_sweep_dir;
 use crate::sweep::store::{load_dir, mapping_lag_of};
-use crate::tables::{table1, table3, table4, threshold_grid, Rendered};
+use crate::tables::{loops_table, table1, table3, table4, threshold_grid, Rendered};
 use anyhow::{bail, Result};
 use ate_eval::io::write_atomic;
 use datasets::Catalog;
@@ -49,6 +49,11 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
     write_table(dir, "table4", &t4)?;
     all.push('\n');
     all.push_str(&t4.markdown);
+    if let Some(l) = loops_table(&records, catalog) {
+        write_table(dir, "loops", &l)?;
+        all.push('\n');
+        all.push_str(&l.markdown);
+    }
     if let Some(g) = threshold_grid(&records, catalog) {
         write_table(dir, "thresholds", &g)?;
         all.push('\n');

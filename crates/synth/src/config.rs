@@ -25,7 +25,7 @@ pub enum Trajectory {
     /// ahead along the path at the walls and furniture, with a gentle hand-held wobble; one
     /// circuit in [`crate::trajectory::LOOP_PERIOD`] = 40 s.
     /// The path is periodic: at 40 s the camera is back at its start pose and then re-sees
-    /// the start (render ~45 s = 1350 frames for the circuit plus the revisit).
+    /// the start (render ~55 s = 1650 frames for the circuit plus 15 s of revisit).
     Loop,
     /// A recorded path: a TUM trajectory file levelled and placed in the room (see
     /// [`crate::recorded`]); time is the recording's, since its first stamp.
@@ -517,17 +517,22 @@ impl Preset {
             Preset::Loop => {
                 let mut c = kinect;
                 c.trajectory = Trajectory::Loop;
-                c.depth_noise.distortion = Some(SystematicDistortion::default());
+                c.depth_noise.distortion = Some(SystematicDistortion {
+                    scale_error: 0.0,
+                    wobble_amplitude: 0.03,
+                    ..SystematicDistortion::default()
+                });
                 c
             }
         }
     }
 
     /// Frames a sequence of this preset has when the user does not say: 300 (10 s at 30 Hz),
-    /// except `loop`: its whole circuit plus 5 s of revisit (45 s, 1350 frames).
+    /// except `loop`: its whole circuit plus 15 s of revisit (55 s, 1650 frames), enough
+    /// keyframes in the revisited place for loop closing's 3-keyframe consistency check.
     pub fn default_frames(&self) -> usize {
         match self {
-            Preset::Loop => 1350,
+            Preset::Loop => 1650,
             _ => 300,
         }
     }

@@ -25,23 +25,51 @@ pub struct Run {
     pub trajectory: Vec<(f64, Isometry3<f64>)>,
 }
 
-/// Renders `n` frames of `synth_cfg` with `seed` and tracks them.
-pub fn run(synth_cfg: SynthConfig, seed: u64, n: usize, config: Config) -> Run {
+/// Rendered frames of a synthetic sequence with their true poses, to track once or many times.
+pub struct Rendered {
+    /// The camera.
+    pub camera: slam_core::Camera,
+    /// The frames, in order.
+    pub frames: Vec<FrameInput>,
+    /// Ground-truth T_world_camera per frame.
+    pub truth: Vec<Isometry3<f64>>,
+}
+
+/// Renders `n` frames of `synth_cfg` with `seed`.
+pub fn render(synth_cfg: SynthConfig, seed: u64, n: usize) -> Rendered {
     let gen = Generator::new(synth_cfg, seed);
-    let camera = gen.camera();
-    let mut system = System::new(camera, config);
-    let mut truth = Vec::new();
-    let mut states = Vec::new();
-    let mut stamps = Vec::new();
+    let mut frames = Vec::with_capacity(n);
+    let mut truth = Vec::with_capacity(n);
     for i in 0..n {
         let f = gen.frame(i);
-        let input = FrameInput {
+        frames.push(FrameInput {
             timestamp: f.timestamp,
             image: Arc::new(f.gray),
             depth: f.depth.map(Arc::new),
             right: f.right.map(Arc::new),
-        };
-        let r = system.track(&input);
+        });
+        truth.push(f.pose_wc);
+    }
+    Rendered {
+        camera: gen.camera(),
+        frames,
+        truth,
+    }
+}
+
+/// Renders `n` frames of `synth_cfg` with `seed` and tracks them.
+pub fn run(synth_cfg: SynthConfig, seed: u64, n: usize, config: Config) -> Run {
+    track(&render(synth_cfg, seed, n), config)
+}
+
+/// Tracks rendered frames with `config`.
+pub fn track(rendered: &Rendered, config: Config) -> Run {
+    let mut system = System::new(rendered.camera.clone(), config);
+    let truth = rendered.truth.clone();
+    let mut states = Vec::new();
+    let mut stamps = Vec::new();
+    for (i, input) in rendered.frames.iter().enumerate() {
+        let r = system.track(input);
         if std::env::var_os("NF_VERBOSE").is_some() {
             let s = &r.stats;
             eprintln!(
@@ -51,9 +79,8 @@ pub fn run(synth_cfg: SynthConfig, seed: u64, n: usize, config: Config) -> Run {
                 s.time_features_ms, s.time_tracking_ms, s.time_mapping_ms, s.time_ba_ms
             );
         }
-        truth.push(f.pose_wc);
         states.push(r.state);
-        stamps.push(f.timestamp);
+        stamps.push(input.timestamp);
     }
     let trajectory = system.trajectory();
     let estimate = trajectory
