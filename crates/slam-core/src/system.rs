@@ -639,12 +639,7 @@ impl System {
             }
         }
 
-        for i in 0..cur.len() {
-            if cur.outliers[i] {
-                cur.map_points[i] = None;
-                cur.outliers[i] = false;
-            }
-        }
+        cur.drop_outliers();
     }
 
     /// Runs local mapping, then loop closing, for the waiting keyframes whose mapping has

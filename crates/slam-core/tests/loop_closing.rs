@@ -3,6 +3,8 @@
 //! same image with every depth scaled: a perceptual alias that no BoW score can tell apart)
 //! does not.
 
+mod common;
+
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -13,17 +15,10 @@ use slam_core::data::{Features, KeyFrameId, Map, ScaleLevels};
 use slam_core::module::loop_closing::{verify_loop, LoopClosingParams, LoopContext};
 use slam_core::optimize::PoseOptConfig;
 use slam_core::place::{PlaceRecognition, Vocabulary};
+
+use common::shipped_vocabulary;
 use slam_core::system::{Config, System};
 use slam_core::FrameInput;
-
-fn shipped_vocabulary() -> Arc<Vocabulary> {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../assets/vocabulary/noisefree-k10L5.voc"
-    );
-    let bytes = std::fs::read(path).expect("the shipped vocabulary");
-    Arc::new(Vocabulary::from_binary(&bytes).expect("valid vocabulary"))
-}
 
 /// A map of a camera turning on the spot for a few seconds (no revisit).
 fn mapped(vocabulary: &Arc<Vocabulary>) -> System {

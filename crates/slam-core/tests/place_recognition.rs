@@ -15,20 +15,13 @@ use slam_core::feature::OrbExtractor;
 use slam_core::frame::Frame;
 use slam_core::matching::bow::search_by_bow;
 use slam_core::matching::brute::search_keyframe_frame;
-use slam_core::place::{PlaceRecognition, Vocabulary};
+use slam_core::place::PlaceRecognition;
 use slam_core::solve::absolute_orientation;
 use slam_core::system::{Config, System, TrackingState};
 use slam_core::FrameInput;
 use synth::{Generator, Preset, Trajectory};
 
-fn shipped_vocabulary() -> Arc<Vocabulary> {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../assets/vocabulary/noisefree-k10L5.voc"
-    );
-    let bytes = std::fs::read(path).expect("the shipped vocabulary");
-    Arc::new(Vocabulary::from_binary(&bytes).expect("valid vocabulary"))
-}
+use common::shipped_vocabulary;
 
 #[test]
 fn kidnapped_camera_relocalizes_at_once_to_the_right_place() {

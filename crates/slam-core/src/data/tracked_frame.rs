@@ -81,4 +81,19 @@ impl TrackedFrame {
     pub fn n_matches(&self) -> usize {
         self.map_points.iter().flatten().count()
     }
+
+    /// Drops the matches the last pose optimization flagged as outliers.
+    pub fn drop_outliers(&mut self) {
+        for (m, o) in self.map_points.iter_mut().zip(self.outliers.iter_mut()) {
+            if *o {
+                *m = None;
+                *o = false;
+            }
+        }
+    }
+
+    /// The map points matched so far (for searches that must not match them again).
+    pub fn matched_map_points(&self) -> std::collections::BTreeSet<MapPointId> {
+        self.map_points.iter().flatten().copied().collect()
+    }
 }

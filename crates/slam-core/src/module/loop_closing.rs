@@ -25,7 +25,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::essential_graph::{optimize_essential_graph, LoopCorrection};
-use super::pose_estimation::{optimize_frame_pose, without_tap, NoiseHooks};
+use super::pose_estimation::{optimize_frame_pose, pose_correspondences, without_tap, NoiseHooks};
 use crate::camera::Camera;
 use crate::data::{KeyFrameId, Map, MapPointId, ScaleLevels, TrackedFrame};
 use crate::feature::{TH_HIGH, TH_LOW};
@@ -34,7 +34,7 @@ use crate::matching::fuse::fuse;
 use crate::matching::projection::search_by_projection_keyframe;
 use crate::optimize::PoseOptConfig;
 use crate::place::{score_l1, PlaceRecognition};
-use crate::solve::{pose_ransac, PoseCorrespondence, PoseRansacParams};
+use crate::solve::{pose_ransac, PoseRansacParams};
 
 /// Loop-closing settings (ORB-SLAM2's values).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -320,22 +320,8 @@ pub fn verify_loop(
         if n < p.min_bow_matches {
             continue;
         }
-        let mut corr = Vec::new();
-        let mut corr_idx = Vec::new();
-        for (i, m) in matches.iter().enumerate() {
-            let Some(mp) = m.and_then(|id| map.map_point(id)) else {
-                continue;
-            };
-            let kp = &k.features.keypoints[i];
-            corr.push(PoseCorrespondence {
-                point_world: mp.position,
-                u: kp.x as f64,
-                v: kp.y as f64,
-                point_camera: k.features.unproject_camera(i, ctx.camera),
-                sigma2: ctx.levels.sigma2(kp.octave),
-            });
-            corr_idx.push(i);
-        }
+        let (corr, corr_idx) =
+            pose_correspondences(&matches, &k.features, map, ctx.camera, ctx.levels);
         let ransac = PoseRansacParams {
             probability: 0.99,
             min_inliers: p.ransac_min_inliers,
@@ -353,7 +339,7 @@ pub fn verify_loop(
             }
         }
         frame.tcw = Some(hyp.tcw);
-        let found: BTreeSet<MapPointId> = frame.map_points.iter().flatten().copied().collect();
+        let found = frame.matched_map_points();
         search_by_projection_keyframe(
             &mut frame,
             c,
@@ -375,12 +361,7 @@ pub fn verify_loop(
         if refined.n_inliers < p.min_refined_inliers {
             continue;
         }
-        for i in 0..frame.len() {
-            if frame.outliers[i] {
-                frame.map_points[i] = None;
-                frame.outliers[i] = false;
-            }
-        }
+        frame.drop_outliers();
         let mut neighbourhood = vec![c];
         neighbourhood.extend(lk.covisibles());
         let mut loop_points = Vec::new();
@@ -395,7 +376,7 @@ pub fn verify_loop(
             }
         }
         for &n in &neighbourhood {
-            let found: BTreeSet<MapPointId> = frame.map_points.iter().flatten().copied().collect();
+            let found = frame.matched_map_points();
             search_by_projection_keyframe(
                 &mut frame,
                 n,

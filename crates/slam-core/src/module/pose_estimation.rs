@@ -236,6 +236,35 @@ pub fn tap_pose_optimizations<R>(f: impl FnOnce() -> R) -> (R, Vec<PoseOptRecord
     (r, records)
 }
 
+/// The 2-D/3-D correspondences of the matched keypoints of `features` (`matches[i]`: the map
+/// point keypoint `i` matched) for [`crate::solve::pose_ransac`], with the keypoint index of
+/// each.
+pub(crate) fn pose_correspondences(
+    matches: &[Option<MapPointId>],
+    features: &Features,
+    map: &Map,
+    camera: &Camera,
+    levels: &ScaleLevels,
+) -> (Vec<crate::solve::PoseCorrespondence>, Vec<usize>) {
+    let mut corr = Vec::new();
+    let mut corr_idx = Vec::new();
+    for (i, m) in matches.iter().enumerate() {
+        let Some(mp) = m.and_then(|id| map.map_point(id)) else {
+            continue;
+        };
+        let kp = &features.keypoints[i];
+        corr.push(crate::solve::PoseCorrespondence {
+            point_world: mp.position,
+            u: kp.x as f64,
+            v: kp.y as f64,
+            point_camera: features.unproject_camera(i, camera),
+            sigma2: levels.sigma2(kp.octave),
+        });
+        corr_idx.push(i);
+    }
+    (corr, corr_idx)
+}
+
 /// Runs `f` with the analysis tap of this thread (if any) suspended: optimizations that are not
 /// the tracking of the frame, such as loop verification, stay out of the frame's record.
 pub(crate) fn without_tap<R>(f: impl FnOnce() -> R) -> R {

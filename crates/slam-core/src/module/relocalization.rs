@@ -5,20 +5,18 @@
 //! and up to two projection searches to gather at least 50 inliers. Candidates are tried one after the other in score
 //! order (ORB-SLAM2 interleaves 5 RANSAC iterations per candidate; same acceptance rules).
 
-use std::collections::BTreeSet;
-
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::pose_estimation::{optimize_frame_pose, NoiseHooks};
+use super::pose_estimation::{optimize_frame_pose, pose_correspondences, NoiseHooks};
 use crate::camera::Camera;
-use crate::data::{KeyFrameId, Map, MapPointId, ScaleLevels, TrackedFrame};
+use crate::data::{KeyFrameId, Map, ScaleLevels, TrackedFrame};
 use crate::matching::bow::search_by_bow;
 use crate::matching::brute::{search_keyframe_frame, similarity_score};
 use crate::matching::projection::search_by_projection_keyframe;
 use crate::optimize::PoseOptConfig;
 use crate::place::PlaceRecognition;
-use crate::solve::{pose_ransac, PoseCorrespondence, PoseRansacParams};
+use crate::solve::{pose_ransac, PoseRansacParams};
 
 /// Relocalization thresholds (ORB-SLAM2's values where it has them).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -116,19 +114,6 @@ pub fn relocalization_candidates(
         .collect()
 }
 
-fn drop_outliers(frame: &mut TrackedFrame) {
-    for i in 0..frame.len() {
-        if frame.outliers[i] {
-            frame.map_points[i] = None;
-            frame.outliers[i] = false;
-        }
-    }
-}
-
-fn found_set(frame: &TrackedFrame) -> BTreeSet<MapPointId> {
-    frame.map_points.iter().flatten().copied().collect()
-}
-
 /// Tries to relocalize `frame`; on success its pose and matches are set and the candidate
 /// keyframe that worked is returned.
 pub fn relocalize(
@@ -181,22 +166,8 @@ pub fn relocalize(
         if n < p.min_matches {
             continue;
         }
-        let mut corr = Vec::new();
-        let mut corr_idx = Vec::new();
-        for (i, m) in matches.iter().enumerate() {
-            let Some(mp) = m.and_then(|id| map.map_point(id)) else {
-                continue;
-            };
-            let kp = &frame.features.keypoints[i];
-            corr.push(PoseCorrespondence {
-                point_world: mp.position,
-                u: kp.x as f64,
-                v: kp.y as f64,
-                point_camera: frame.features.unproject_camera(i, ctx.camera),
-                sigma2: ctx.levels.sigma2(kp.octave),
-            });
-            corr_idx.push(i);
-        }
+        let (corr, corr_idx) =
+            pose_correspondences(&matches, &frame.features, map, ctx.camera, ctx.levels);
         let Some(hyp) = pose_ransac(&corr, ctx.camera, &ransac, rng) else {
             continue;
         };
@@ -214,16 +185,16 @@ pub fn relocalize(
         if n_good < 10 {
             continue;
         }
-        drop_outliers(frame);
+        frame.drop_outliers();
         if n_good < p.min_inliers {
-            let found = found_set(frame);
+            let found = frame.matched_map_points();
             let added = search_by_projection_keyframe(
                 frame, kf, &found, 10.0, 100, map, ctx.camera, ctx.levels,
             );
             if added + n_good >= p.min_inliers {
                 n_good = opt(frame);
                 if n_good > 30 && n_good < p.min_inliers {
-                    let found = found_set(frame);
+                    let found = frame.matched_map_points();
                     let added = search_by_projection_keyframe(
                         frame, kf, &found, 3.0, 64, map, ctx.camera, ctx.levels,
                     );
@@ -231,7 +202,7 @@ pub fn relocalize(
                         n_good = opt(frame);
                     }
                 }
-                drop_outliers(frame);
+                frame.drop_outliers();
             }
         }
         if n_good >= p.min_inliers {

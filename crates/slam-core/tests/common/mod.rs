@@ -127,3 +127,13 @@ pub fn ate_rmse(run: &Run) -> f64 {
 pub fn tracked(run: &Run) -> usize {
     run.states.iter().filter(|s| s.is_tracked()).count()
 }
+
+/// The vocabulary shipped in assets/ (the one the binary compiles in).
+pub fn shipped_vocabulary() -> Arc<slam_core::place::Vocabulary> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/vocabulary/noisefree-k10L5.voc"
+    );
+    let bytes = std::fs::read(path).expect("the shipped vocabulary");
+    Arc::new(slam_core::place::Vocabulary::from_binary(&bytes).expect("valid vocabulary"))
+}
