@@ -440,9 +440,10 @@ impl System {
         } else {
             self.track_frame(&mut cur, &mut stats);
             // Local mapping and loop closing of the keyframes due by now (this frame's, when
-            // synchronous), before the frame's pose is stored relative to its reference
-            // keyframe's refined pose.
+            // synchronous); the frame then moves with its reference keyframe.
+            let reference_before = cur.reference_kf.and_then(|r| self.map.keyframe_pose_any(r));
             mapping = self.map_due_keyframes(cur.id, &mut stats);
+            self.move_with_reference(&mut cur, reference_before);
         }
         self.record(&cur);
         let tcw = if self.state.is_tracked() {
@@ -675,6 +676,22 @@ impl System {
             stats.time_loop_ms += t.elapsed().as_secs_f64() * 1e3;
         }
         total
+    }
+
+    /// Carries the current frame along with its reference keyframe when local BA, a loop
+    /// correction or a global BA moved the keyframe after the frame was tracked: the frame was
+    /// tracked in the map as it was, so its pose relative to the reference keyframe is what it
+    /// knows. Without this the stored relative pose absorbs the keyframe's move, and the next
+    /// frame's motion model starts from a pose in the uncorrected map (under `--mapping-lag`;
+    /// synchronously the reference keyframe is the frame itself).
+    fn move_with_reference(&self, cur: &mut TrackedFrame, before: Option<Isometry3<f64>>) {
+        let after = cur.reference_kf.and_then(|r| self.map.keyframe_pose_any(r));
+        if let (Some(tcw), Some(before), Some(after)) = (cur.tcw, before, after) {
+            if before == after {
+                return;
+            }
+            cur.tcw = Some(renormalized(&(tcw * before.inverse() * after)));
+        }
     }
 
     /// Loop closing for the freshly mapped keyframe `kf`; after a closed loop, the global BA

@@ -28,24 +28,27 @@ fn kidnapped_camera_relocalizes_at_once_to_the_right_place() {
     let mut cfg = Preset::Kinect.config();
     cfg.trajectory = Trajectory::Spin;
     cfg.motion_scale = 1.5;
-    let gen = Generator::new(cfg, 5);
     const CUT: usize = 300;
+    let gen = Generator::new(cfg.clone(), 5);
+    let rendered = common::render(cfg, 5, CUT);
     // Frames 0..300, then frames 30..70 again with later stamps.
     let order: Vec<usize> = (0..CUT).chain(30..70).collect();
-    let mut system = System::with_vocabulary(gen.camera(), Config::default(), shipped_vocabulary());
+    let mut system = System::with_vocabulary(
+        rendered.camera.clone(),
+        Config::default(),
+        shipped_vocabulary(),
+    );
     let mut states = Vec::new();
     let mut truth = Vec::new();
     let mut estimate = Vec::new();
     for (k, &i) in order.iter().enumerate() {
-        let f = gen.frame(i);
-        let r = system.track(&FrameInput {
+        let input = FrameInput {
             timestamp: gen.timestamp(k),
-            image: Arc::new(f.gray),
-            depth: f.depth.map(Arc::new),
-            right: f.right.map(Arc::new),
-        });
+            ..rendered.frames[i].clone()
+        };
+        let r = system.track(&input);
         states.push(r.state);
-        truth.push(f.pose_wc.translation.vector);
+        truth.push(rendered.truth[i].translation.vector);
         estimate.push(r.tcw.map(|t| t.inverse().translation.vector));
     }
     let keyframes_before_cut = system.frame_stats()[CUT - 1].n_keyframes;

@@ -35,21 +35,40 @@ pub struct Rendered {
     pub truth: Vec<Isometry3<f64>>,
 }
 
-/// Renders `n` frames of `synth_cfg` with `seed`.
+/// Renders `n` frames of `synth_cfg` with `seed`, on as many threads as there are cores (each
+/// frame is a pure function of the configuration, seed and index, so the bytes do not depend on
+/// the split).
 pub fn render(synth_cfg: SynthConfig, seed: u64, n: usize) -> Rendered {
     let gen = Generator::new(synth_cfg, seed);
-    let mut frames = Vec::with_capacity(n);
-    let mut truth = Vec::with_capacity(n);
-    for i in 0..n {
-        let f = gen.frame(i);
-        frames.push(FrameInput {
-            timestamp: f.timestamp,
-            image: Arc::new(f.gray),
-            depth: f.depth.map(Arc::new),
-            right: f.right.map(Arc::new),
-        });
-        truth.push(f.pose_wc);
-    }
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
+    let chunk = n.div_ceil(threads).max(1);
+    let rendered: Vec<(FrameInput, Isometry3<f64>)> = std::thread::scope(|s| {
+        let gen = &gen;
+        let handles: Vec<_> = (0..n)
+            .step_by(chunk)
+            .map(|start| {
+                s.spawn(move || {
+                    (start..(start + chunk).min(n))
+                        .map(|i| {
+                            let f = gen.frame(i);
+                            let input = FrameInput {
+                                timestamp: f.timestamp,
+                                image: Arc::new(f.gray),
+                                depth: f.depth.map(Arc::new),
+                                right: f.right.map(Arc::new),
+                            };
+                            (input, f.pose_wc)
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("render thread"))
+            .collect()
+    });
+    let (frames, truth) = rendered.into_iter().unzip();
     Rendered {
         camera: gen.camera(),
         frames,
