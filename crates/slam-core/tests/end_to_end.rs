@@ -1,4 +1,4 @@
-//! End-to-end tests of the ORB-SLAM2 baseline on synthetic sequences (200 frames of 640x480
+//! End-to-end tests of the ORB-SLAM2 baseline on synthetic sequences (150-200 frames of 640x480
 //! RGB-D, 150 of 752x480 stereo): accuracy per preset with every frame tracked, relocalization after an
 //! occlusion, and bit-identical reruns. Each test renders and tracks its sequence in well under a
 //! minute in the (optimised) dev profile.
@@ -10,7 +10,7 @@ use synth::Preset;
 
 use common::{ate_rmse, render, run, track, tracked};
 
-const FRAMES: usize = 200;
+const FRAMES: usize = 150;
 const STEREO_FRAMES: usize = 150;
 
 #[test]
