@@ -7,7 +7,7 @@ mod common;
 use common::{assert_clean_failure, assert_ok, noisefree, noisefree_ok, tmpdir};
 use std::path::Path;
 
-const FRAMES: &str = "40";
+const FRAMES: &str = "25";
 
 fn sweep(out: &Path, extra: &[&str]) {
     let mut args = vec![
@@ -121,7 +121,7 @@ fn sweep_resume_shards_and_table() {
         "{t_full}"
     );
     assert!(full.join("table3.csv").exists() && full.join("table4.md").exists());
-    // No revisit in 40 frames: the loops table says no run closed a loop.
+    // No revisit in 25 frames: the loops table says no run closed a loop.
     let loops = std::fs::read_to_string(full.join("loops.md")).unwrap();
     assert!(
         loops.contains("| clean | 0 (0/3 runs) | 0 (0/3 runs) |")
