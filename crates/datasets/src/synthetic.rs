@@ -4,8 +4,7 @@
 
 use crate::{Format, Sequence};
 use rayon::prelude::*;
-use slam_core::{FrameInput, SensorKind};
-use std::sync::Arc;
+use slam_core::SensorKind;
 
 /// The first `n_frames` frames of `gen` with exact ground truth (T_world_camera, TUM
 /// convention). RGB-D presets give [`Format::TumRgbd`], stereo presets [`Format::EurocStereo`]
@@ -23,12 +22,7 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
         .map(|f| {
             stamps.push(f.timestamp);
             poses.push(f.pose_wc);
-            FrameInput {
-                timestamp: f.timestamp,
-                image: Arc::new(f.gray),
-                depth: f.depth.map(Arc::new),
-                right: f.right.map(Arc::new),
-            }
+            f.into_input()
         })
         .collect();
     let format = match camera.sensor {

@@ -93,15 +93,7 @@ fn build() -> Mapped {
     for start in (0..FRAMES).step_by(CHUNK) {
         let inputs: Vec<FrameInput> = (start..(start + CHUNK).min(FRAMES))
             .into_par_iter()
-            .map(|i| {
-                let f = gen.frame(i);
-                FrameInput {
-                    timestamp: f.timestamp,
-                    image: Arc::new(f.gray),
-                    depth: f.depth.map(Arc::new),
-                    right: f.right.map(Arc::new),
-                }
-            })
+            .map(|i| gen.frame(i).into_input())
             .collect();
         for input in &inputs {
             system.track(input);

@@ -19,20 +19,13 @@ use slam_core::module::pose_estimation::NoiseHooks;
 use slam_core::module::relocalization::{relocalize, RelocalizationContext, RelocalizationParams};
 use slam_core::optimize::PoseOptConfig;
 use slam_core::place::{PlaceRecognition, Vocabulary};
-use slam_core::FrameInput;
 use synth::{Generator, Preset, Trajectory};
 
 const KEYFRAMES: usize = 1000;
 
 fn features_of(gen: &Generator, i: usize, orb: &OrbConfig) -> Features {
-    let f = gen.frame(i);
     let camera = gen.camera();
-    let input = FrameInput {
-        timestamp: f.timestamp,
-        image: Arc::new(f.gray),
-        depth: f.depth.map(Arc::new),
-        right: f.right.map(Arc::new),
-    };
+    let input = gen.frame(i).into_input();
     let mut ex = OrbExtractor::new(orb.clone());
     let fr = Frame::new(i as u64, &input, &camera, &mut ex);
     Features::new(fr.keypoints, fr.descriptors, fr.depth, fr.u_right, &camera)

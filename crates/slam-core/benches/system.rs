@@ -4,7 +4,6 @@
 //!
 //! Run: `cargo bench -p slam-core --bench system`.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -16,17 +15,7 @@ const FRAMES: usize = 120;
 
 fn inputs(preset: Preset) -> (slam_core::Camera, Vec<FrameInput>) {
     let gen = synth::Generator::new(preset.config(), 1);
-    let frames = (0..FRAMES)
-        .map(|i| {
-            let f = gen.frame(i);
-            FrameInput {
-                timestamp: f.timestamp,
-                image: Arc::new(f.gray),
-                depth: f.depth.map(Arc::new),
-                right: f.right.map(Arc::new),
-            }
-        })
-        .collect();
+    let frames = (0..FRAMES).map(|i| gen.frame(i).into_input()).collect();
     (gen.camera(), frames)
 }
 

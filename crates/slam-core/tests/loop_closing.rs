@@ -147,10 +147,8 @@ fn worst_frame(trajectory: &[(f64, Isometry3<f64>)], truth: &[Isometry3<f64>]) -
         .map(|(_, p)| p.translation.vector)
         .collect();
     let gt: Vec<Vector3<f64>> = truth.iter().map(|p| p.translation.vector).collect();
-    let align = slam_core::solve::absolute_orientation(&est, &gt).expect("aligned");
-    est.iter()
-        .zip(&gt)
-        .map(|(e, g)| (align.transform_point(&Point3::from(*e)).coords - g).norm())
+    common::aligned_errors(&est, &gt)
+        .into_iter()
         .enumerate()
         .fold(
             (0.0, 0),

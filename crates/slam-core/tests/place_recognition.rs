@@ -7,8 +7,6 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use nalgebra::{Point3, Vector3};
 use slam_core::data::Features;
 use slam_core::feature::OrbExtractor;
@@ -92,15 +90,7 @@ fn bow_matching_finds_most_brute_force_matches() {
     let place = PlaceRecognition::new(voc.clone());
     let config = Config::default();
     let mut system = System::with_vocabulary(gen.camera(), config.clone(), voc);
-    let input = |i: usize| {
-        let f = gen.frame(i);
-        FrameInput {
-            timestamp: f.timestamp,
-            image: Arc::new(f.gray),
-            depth: f.depth.map(Arc::new),
-            right: f.right.map(Arc::new),
-        }
-    };
+    let input = |i: usize| gen.frame(i).into_input();
     for i in 0..40 {
         system.track(&input(i));
     }

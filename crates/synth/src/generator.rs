@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3};
-use slam_core::{Camera, DepthImage, GrayImage};
+use slam_core::{Camera, DepthImage, FrameInput, GrayImage};
 
 use crate::config::SynthConfig;
 use crate::hash::{NoiseKey, Stream};
@@ -41,6 +41,19 @@ pub struct SynthFrame {
     pub pose_wc: Isometry3<f64>,
     /// Per pixel: true where a moving object is seen (only when moving objects are on).
     pub moving_mask: Option<Vec<bool>>,
+}
+
+impl SynthFrame {
+    /// What a SLAM system is given of this frame (grey image, measured depth or right image);
+    /// the ground-truth fields are dropped.
+    pub fn into_input(self) -> FrameInput {
+        FrameInput {
+            timestamp: self.timestamp,
+            image: Arc::new(self.gray),
+            depth: self.depth.map(Arc::new),
+            right: self.right.map(Arc::new),
+        }
+    }
 }
 
 /// Generates the frames of one (config, seed) sequence.

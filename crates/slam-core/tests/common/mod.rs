@@ -51,13 +51,8 @@ pub fn render(synth_cfg: SynthConfig, seed: u64, n: usize) -> Rendered {
                     (start..(start + chunk).min(n))
                         .map(|i| {
                             let f = gen.frame(i);
-                            let input = FrameInput {
-                                timestamp: f.timestamp,
-                                image: Arc::new(f.gray),
-                                depth: f.depth.map(Arc::new),
-                                right: f.right.map(Arc::new),
-                            };
-                            (input, f.pose_wc)
+                            let pose_wc = f.pose_wc;
+                            (f.into_input(), pose_wc)
                         })
                         .collect::<Vec<_>>()
                 })
@@ -121,6 +116,17 @@ pub fn track(rendered: &Rendered, config: Config) -> Run {
     }
 }
 
+/// Position error (metres) of each estimated position after the SE3 alignment of all of them
+/// to their true positions (`estimate[k]` pairs with `truth[k]`).
+pub fn aligned_errors(estimate: &[Vector3<f64>], truth: &[Vector3<f64>]) -> Vec<f64> {
+    let t = absolute_orientation(estimate, truth).expect("enough poses");
+    estimate
+        .iter()
+        .zip(truth)
+        .map(|(e, g)| (t.transform_point(&Point3::from(*e)).coords - g).norm())
+        .collect()
+}
+
 /// ATE RMSE (metres) of the tracked frames after SE3 alignment to the truth.
 pub fn ate_rmse(run: &Run) -> f64 {
     let est: Vec<Vector3<f64>> = run
@@ -133,13 +139,8 @@ pub fn ate_rmse(run: &Run) -> f64 {
         .iter()
         .map(|(i, _)| run.truth[*i].translation.vector)
         .collect();
-    let t = absolute_orientation(&est, &gt).expect("enough poses");
-    let se: f64 = est
-        .iter()
-        .zip(&gt)
-        .map(|(e, g)| (t.transform_point(&Point3::from(*e)).coords - g).norm_squared())
-        .sum();
-    (se / est.len() as f64).sqrt()
+    let errors = aligned_errors(&est, &gt);
+    (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
 }
 
 /// Number of frames whose state is tracked.
