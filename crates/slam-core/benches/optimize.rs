@@ -1,6 +1,9 @@
-//! Benchmarks of the two solvers at ORB-SLAM2's working sizes, single thread: pose-only
-//! optimization of a frame with 500 matches (10 % mismatches), and local bundle adjustment of
-//! 20 keyframes / 2000 points / ~15k observations (60 % RGB-D, 40 % monocular keypoints).
+//! Benchmarks of the solvers at ORB-SLAM2's working sizes, single thread: pose-only
+//! optimization of a frame with 500 matches (10 % mismatches), local bundle adjustment of
+//! 20 keyframes / 2000 points / ~15k observations (60 % RGB-D, 40 % monocular keypoints), and,
+//! for loop closing, the essential graph (20 iterations) and a global bundle adjustment (10
+//! iterations, robust) over a circuit of 400 keyframes that flies over its first quarter again
+//! (15k points on the walls of a room, feature tracks of 4-20 keyframes).
 //!
 //! Run: `flock /tmp/nf-cargo.lock cargo bench -p slam-core --bench optimize`.
 
@@ -9,10 +12,13 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use slam_core::optimize::{
-    local_bundle_adjustment, pose_optimization, BaConfig, BaKeyFrame, BaObservation, BaPoint,
-    BaProblem, Measurement, PoseObservation, PoseOptConfig,
+    local_bundle_adjustment, optimize_pose_graph, pose_optimization, BaConfig, BaKeyFrame,
+    BaObservation, BaPoint, BaProblem, Measurement, PoseGraph, PoseGraphEdge, PoseObservation,
+    PoseOptConfig,
 };
 use slam_core::Camera;
+use std::collections::BTreeMap;
+use std::time::Instant;
 
 /// A standard normal sample (Box-Muller).
 fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
@@ -162,6 +168,128 @@ fn local_ba_input(camera: &Camera) -> BaProblem {
     problem
 }
 
+/// Keyframes of the circuit: 1.25 turns, so the last 80 fly over the first ones again.
+const CIRCUIT_KEYFRAMES: usize = 400;
+
+/// A circuit round a room (camera centres on a 1.5 m circle, looking out at walls 4 m from the
+/// centre): the true poses, a global BA problem over them (poses drifted, the first fixed) and
+/// the essential graph of the map (spanning tree plus every pair of keyframes sharing at least
+/// 100 points, measured at the truth; the poses start with the accumulated drift).
+fn circuit_input(camera: &Camera) -> (BaProblem, PoseGraph) {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let n = CIRCUIT_KEYFRAMES;
+    let heading = |k: usize| std::f64::consts::TAU * 1.25 * k as f64 / n as f64;
+    let gt: Vec<Isometry3<f64>> = (0..n)
+        .map(|k| {
+            let a = heading(k);
+            let centre = Vector3::new(1.5 * a.cos(), 0.05 * gaussian(&mut rng), 1.5 * a.sin());
+            let z = Vector3::new(a.cos(), 0.0, a.sin());
+            let y = Vector3::y();
+            let rot = nalgebra::Rotation3::from_basis_unchecked(&[y.cross(&z), y, z]);
+            let wobble = UnitQuaternion::from_euler_angles(
+                0.02 * gaussian(&mut rng),
+                0.02 * gaussian(&mut rng),
+                0.02 * gaussian(&mut rng),
+            );
+            Isometry3::from_parts(
+                Translation3::from(centre),
+                UnitQuaternion::from_rotation_matrix(&rot) * wobble,
+            )
+            .inverse()
+        })
+        .collect();
+    let mut problem = BaProblem::default();
+    let mut shared: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+    while problem.points.len() < 15_000 {
+        let phi = rng.random_range(0.0..std::f64::consts::TAU);
+        let pw = Vector3::new(
+            4.0 * phi.cos(),
+            rng.random_range(-1.5..1.5),
+            4.0 * phi.sin(),
+        );
+        // Each pass of the circuit by the point gives a track over a run of consecutive
+        // keyframes that see it.
+        let visible: Vec<usize> = (0..n)
+            .filter(|&k| {
+                let p = gt[k] * Point3::from(pw);
+                p.z > 0.1
+                    && camera.in_image(camera.project(&p.coords).x, camera.project(&p.coords).y)
+            })
+            .collect();
+        let mut track = Vec::new();
+        for pass in visible.chunk_by(|a, b| b - a == 1) {
+            let len = rng.random_range(4..=20).min(pass.len());
+            let start = rng.random_range(0..=pass.len() - len);
+            track.extend_from_slice(&pass[start..start + len]);
+        }
+        let j = problem.points.len();
+        let before = problem.observations.len();
+        for &k in &track {
+            if let Some((measurement, inv_sigma2)) = observe(camera, &gt[k], &pw, &mut rng) {
+                problem.observations.push(BaObservation {
+                    keyframe: k,
+                    point: j,
+                    measurement,
+                    inv_sigma2,
+                });
+            }
+        }
+        if problem.observations.len() - before < 2 {
+            problem.observations.truncate(before);
+            continue;
+        }
+        for (a, oa) in problem.observations[before..].iter().enumerate() {
+            for ob in &problem.observations[before + a + 1..] {
+                *shared.entry((oa.keyframe, ob.keyframe)).or_default() += 1;
+            }
+        }
+        let noise = Vector3::new(gaussian(&mut rng), gaussian(&mut rng), gaussian(&mut rng)) * 0.03;
+        problem.points.push(BaPoint {
+            position: pw + noise,
+        });
+    }
+    // Drift that grows along the circuit, as odometry leaves it before the loop closes.
+    let mut drifted = gt.clone();
+    for k in 1..n {
+        let step = gt[k] * gt[k - 1].inverse();
+        drifted[k] = perturb(
+            &(step * drifted[k - 1]),
+            0.002,
+            0.1f64.to_radians(),
+            &mut rng,
+        );
+    }
+    problem.keyframes = drifted
+        .iter()
+        .enumerate()
+        .map(|(k, &tcw)| BaKeyFrame { tcw, fixed: k == 0 })
+        .collect();
+    let mut edges: Vec<PoseGraphEdge> = (1..n)
+        .map(|k| PoseGraphEdge {
+            i: k,
+            j: k - 1,
+            t_ij: gt[k] * gt[k - 1].inverse(),
+        })
+        .collect();
+    for (&(a, b), &count) in &shared {
+        if count >= 100 && a.abs_diff(b) > 1 {
+            edges.push(PoseGraphEdge {
+                i: b.max(a),
+                j: b.min(a),
+                t_ij: gt[b.max(a)] * gt[b.min(a)].inverse(),
+            });
+        }
+    }
+    let mut fixed = vec![false; n];
+    fixed[0] = true;
+    let graph = PoseGraph {
+        poses: drifted,
+        fixed,
+        edges,
+    };
+    (problem, graph)
+}
+
 fn bench_optimize(c: &mut Criterion) {
     let camera = Camera::tum_fr3();
     let (start, obs) = pose_only_input(&camera);
@@ -184,6 +312,54 @@ fn bench_optimize(c: &mut Criterion) {
         b.iter_batched(
             || problem.clone(),
             |mut p| local_bundle_adjustment(&camera, &mut p, &ba_cfg),
+            BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+
+    let (problem, graph) = circuit_input(&camera);
+    let gba_cfg = BaConfig {
+        first_pass_iterations: 10,
+        second_pass_iterations: 0,
+    };
+    eprintln!(
+        "circuit: {} keyframes, {} points, {} observations; essential graph of {} edges",
+        problem.keyframes.len(),
+        problem.points.len(),
+        problem.observations.len(),
+        graph.edges.len()
+    );
+    let t = Instant::now();
+    let report = optimize_pose_graph(&mut graph.clone(), 20);
+    eprintln!(
+        "essential graph once: {:.3} s, cost {:.3e} -> {:.3e} in {} iterations",
+        t.elapsed().as_secs_f64(),
+        report.initial_cost,
+        report.final_cost,
+        report.iterations
+    );
+    let t = Instant::now();
+    let report = local_bundle_adjustment(&camera, &mut problem.clone(), &gba_cfg);
+    eprintln!(
+        "global BA once: {:.3} s, chi2 {:.4e} -> {:.4e} in {} iterations",
+        t.elapsed().as_secs_f64(),
+        report.initial_cost,
+        report.final_cost,
+        report.iterations
+    );
+    let mut group = c.benchmark_group("loop_closing_400kf");
+    group.sample_size(10);
+    group.bench_function("essential_graph", |b| {
+        b.iter_batched(
+            || graph.clone(),
+            |mut g| optimize_pose_graph(&mut g, 20),
+            BatchSize::LargeInput,
+        )
+    });
+    group.bench_function("global_ba", |b| {
+        b.iter_batched(
+            || problem.clone(),
+            |mut p| local_bundle_adjustment(&camera, &mut p, &gba_cfg),
             BatchSize::LargeInput,
         )
     });

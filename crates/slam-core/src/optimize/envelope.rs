@@ -1,7 +1,9 @@
 //! A symmetric positive-definite matrix stored by its envelope (profile) and its in-place
-//! Cholesky factor. Pose graphs and global bundle adjustment ordered by keyframe id have narrow
-//! bands plus a few long rows (loop edges), for which the envelope keeps the factor sparse
-//! without a fill-reducing ordering: the factor `L` has exactly the envelope of the matrix.
+//! Cholesky factor. The factor `L` has exactly the envelope of the matrix, so the work depends
+//! on how far each row reaches back: pose graphs and global bundle adjustment number their
+//! keyframes with [`super::ordering`] first, which turns a circuit into a narrow band.
+
+use nalgebra::Matrix6;
 
 /// Lower triangle of a symmetric matrix, row `i` stored from column `first[i]` to `i`.
 #[derive(Clone, Debug)]
@@ -67,6 +69,25 @@ impl EnvelopeMatrix {
         }
     }
 
+    /// Subtracts the 6 x 6 `block` at rows `6 * bi..`, columns `6 * bj..` (`bj <= bi`; of a
+    /// diagonal block only the lower triangle is stored).
+    pub(crate) fn sub_block6(&mut self, bi: usize, bj: usize, block: &Matrix6<f64>) {
+        debug_assert!(bj <= bi);
+        for r in 0..6 {
+            let row = 6 * bi + r;
+            let cols = if bi == bj { r + 1 } else { 6 };
+            let k = self.index(row, 6 * bj);
+            for (c, x) in self.data[k..k + cols].iter_mut().enumerate() {
+                *x -= block[(r, c)];
+            }
+        }
+    }
+
+    /// Adds the 6 x 6 diagonal block `bi` (its lower triangle) of `block`.
+    pub(crate) fn add_diagonal_block6(&mut self, bi: usize, block: &Matrix6<f64>) {
+        self.sub_block6(bi, bi, &(-block));
+    }
+
     /// Replaces the matrix by its Cholesky factor `L` (`A = L L^T`); false when the matrix is
     /// not positive definite (the contents are then unusable).
     pub(crate) fn cholesky(&mut self) -> bool {
@@ -78,18 +99,14 @@ impl EnvelopeMatrix {
                 let fj = self.first[j];
                 let rj = self.start[j];
                 let k0 = fi.max(fj);
-                let mut s = self.data[ri + (j - fi)];
-                for k in k0..j {
-                    s -= self.data[ri + (k - fi)] * self.data[rj + (k - fj)];
-                }
-                let d = self.data[rj + (j - fj)];
-                self.data[ri + (j - fi)] = s / d;
+                let (head, tail) = self.data.split_at_mut(ri);
+                let row_j = &head[rj + (k0 - fj)..rj + (j - fj)];
+                let row_i = &tail[k0 - fi..j - fi];
+                let s = tail[j - fi] - dot(row_i, row_j);
+                tail[j - fi] = s / head[rj + (j - fj)];
             }
-            let mut s = self.data[ri + (i - fi)];
-            for k in fi..i {
-                let l = self.data[ri + (k - fi)];
-                s -= l * l;
-            }
+            let row_i = &self.data[ri..ri + (i - fi)];
+            let s = self.data[ri + (i - fi)] - dot(row_i, row_i);
             if !s.is_finite() || s <= 0.0 {
                 return false;
             }
@@ -103,8 +120,7 @@ impl EnvelopeMatrix {
         let n = self.dim();
         for i in 0..n {
             let (fi, ri) = (self.first[i], self.start[i]);
-            let row = &self.data[ri..ri + (i - fi)];
-            let s: f64 = row.iter().zip(&b[fi..i]).map(|(l, x)| l * x).sum();
+            let s = dot(&self.data[ri..ri + (i - fi)], &b[fi..i]);
             b[i] = (b[i] - s) / self.data[ri + (i - fi)];
         }
         for i in (0..n).rev() {
@@ -119,11 +135,43 @@ impl EnvelopeMatrix {
     }
 }
 
+/// Dot product of two equally long slices in four independent sums (which the compiler can keep
+/// in vector registers; one running sum would serialise every addition).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    debug_assert_eq!(a.len(), b.len());
+    let mut acc = [0.0f64; 4];
+    let (a4, a_rest) = a.split_at(a.len() - a.len() % 4);
+    let (b4, b_rest) = b.split_at(a4.len());
+    for (x, y) in a4.chunks_exact(4).zip(b4.chunks_exact(4)) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let mut s = (acc[0] + acc[2]) + (acc[1] + acc[3]);
+    for (x, y) in a_rest.iter().zip(b_rest) {
+        s += x * y;
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::optimize::test_scene::{gaussian, rng};
     use nalgebra::{DMatrix, DVector};
+
+    #[test]
+    fn block_updates_land_in_the_lower_triangle() {
+        let mut env = EnvelopeMatrix::zeros(vec![0; 12]);
+        let block = Matrix6::from_fn(|r, c| (10 * r + c) as f64);
+        env.add_diagonal_block6(1, &block);
+        env.sub_block6(1, 0, &block);
+        assert_eq!(env.get(8, 7), 21.0);
+        assert_eq!(env.get(7, 8), 21.0, "symmetric read of the lower entry");
+        assert_eq!(env.get(8, 1), -21.0);
+        assert_eq!(env.get(1, 8), -21.0);
+        assert_eq!(env.get(0, 0), 0.0);
+    }
 
     #[test]
     fn solves_a_banded_system_with_a_long_row_like_the_dense_solver() {

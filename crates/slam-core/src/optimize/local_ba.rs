@@ -2,15 +2,18 @@
 //! keyframe poses and the map points they see are refined jointly; keyframes outside the window
 //! that also see those points constrain them with fixed poses.
 //!
-//! Sparse Levenberg-Marquardt: each point's 3x3 block is eliminated (Schur complement), the
-//! reduced camera system (6 x 6 blocks, one per free keyframe) is solved by dense Cholesky, and
+//! Sparse Levenberg-Marquardt: each point's 3x3 block is eliminated (Schur complement), the reduced
+//! camera system (6 x 6 blocks, one per free keyframe) is solved by Cholesky (dense for a local
+//! window; by its envelope in reverse Cuthill-McKee order for a global BA over many keyframes), and
 //! the point steps are recovered by back-substitution. Two passes as in ORB-SLAM2: a robust pass
-//! (Huber, `first_pass_iterations`), then observations above their chi2 gate or behind their
-//! camera are excluded and the kernels dropped for `second_pass_iterations` more.
+//! (Huber, `first_pass_iterations`), then observations above their chi2 gate or behind their camera
+//! are excluded and the kernels dropped for `second_pass_iterations` more.
 
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, Matrix6x3, Vector3};
 
+use super::envelope::EnvelopeMatrix;
 use super::lm::{levenberg_marquardt, LmProblem};
+use super::ordering::{inverse_permutation, Adjacency};
 use super::residual::{linearize_observation, observation_chi2, Measurement};
 use super::robust::{kernel_cost, kernel_weight};
 use crate::geometry::{d_point_d_left_perturbation, exp_se3, Vector6};
@@ -109,6 +112,17 @@ pub fn local_bundle_adjustment(
     problem: &mut BaProblem,
     cfg: &BaConfig,
 ) -> BaReport {
+    bundle_adjustment(camera, problem, cfg, ENVELOPE_MIN_KEYFRAMES)
+}
+
+/// [`local_bundle_adjustment`] storing the reduced camera system by its envelope from
+/// `envelope_min` free keyframes on.
+fn bundle_adjustment(
+    camera: &Camera,
+    problem: &mut BaProblem,
+    cfg: &BaConfig,
+    envelope_min: usize,
+) -> BaReport {
     for (i, o) in problem.observations.iter().enumerate() {
         assert!(
             o.keyframe < problem.keyframes.len() && o.point < problem.points.len(),
@@ -120,7 +134,7 @@ pub fn local_bundle_adjustment(
         );
     }
     let initial_chi2 = all_chi2(camera, problem);
-    let mut solver = BaSolver::new(camera, problem);
+    let mut solver = BaSolver::new(camera, problem, envelope_min);
 
     let pass1: Vec<bool> = initial_chi2.iter().map(Option::is_some).collect();
     solver.set_active(&pass1, true);
@@ -211,6 +225,9 @@ struct BaSolver<'a> {
     /// Keyframe index -> index of its 6-DoF block in the reduced camera system, `None` if fixed.
     kf_var: Vec<Option<usize>>,
     n_var: usize,
+    /// Envelope of the reduced camera system by 6 x 6 block (first block column per block
+    /// row) when it is stored sparsely; `None`: dense.
+    first_block: Option<Vec<usize>>,
     robust: bool,
     /// Active observations grouped by point: those of point `j` are
     /// `point_obs[point_start[j]..point_start[j + 1]]`.
@@ -233,9 +250,9 @@ struct BaSolver<'a> {
 }
 
 impl<'a> BaSolver<'a> {
-    fn new(camera: &'a Camera, problem: &'a BaProblem) -> Self {
+    fn new(camera: &'a Camera, problem: &'a BaProblem, envelope_min: usize) -> Self {
         let mut n_var = 0;
-        let kf_var = problem
+        let mut kf_var: Vec<Option<usize>> = problem
             .keyframes
             .iter()
             .map(|kf| {
@@ -245,6 +262,15 @@ impl<'a> BaSolver<'a> {
                 })
             })
             .collect();
+        let mut first_block = None;
+        if n_var >= envelope_min {
+            let coupling = camera_coupling(problem, &kf_var, n_var);
+            let position = inverse_permutation(&coupling.reverse_cuthill_mckee());
+            for var in kf_var.iter_mut().flatten() {
+                *var = position[*var];
+            }
+            first_block = Some(coupling.envelope_first(&position));
+        }
         let poses: Vec<Isometry3<f64>> = problem.keyframes.iter().map(|k| k.tcw).collect();
         let points: Vec<Vector3<f64>> = problem.points.iter().map(|p| p.position).collect();
         BaSolver {
@@ -252,6 +278,7 @@ impl<'a> BaSolver<'a> {
             obs: &problem.observations,
             kf_var,
             n_var,
+            first_block,
             robust: false,
             point_start: vec![0; points.len() + 1],
             point_obs: Vec::new(),
@@ -382,11 +409,16 @@ impl LmProblem for BaSolver<'_> {
     fn solve(&mut self, lambda: f64) -> Option<f64> {
         let n = self.n_var;
         let n_points = self.points.len();
-        let mut s = DMatrix::<f64>::zeros(6 * n, 6 * n);
+        let mut s = match &self.first_block {
+            None => CameraSystem::Dense(DMatrix::<f64>::zeros(6 * n, 6 * n)),
+            Some(first) => CameraSystem::Envelope(EnvelopeMatrix::zeros(
+                (0..6 * n).map(|row| 6 * first[row / 6]).collect(),
+            )),
+        };
         let mut rhs = DVector::<f64>::zeros(6 * n);
         for i in 0..n {
             let block = self.u[i] + Matrix6::identity() * lambda;
-            s.fixed_view_mut::<6, 6>(6 * i, 6 * i).copy_from(&block);
+            s.set_diagonal_block(i, &block);
             rhs.fixed_rows_mut::<6>(6 * i).copy_from(&self.gc[i]);
         }
         // Eliminate every point: S -= W V^-1 W^T, rhs -= W V^-1 g_p.
@@ -418,24 +450,12 @@ impl LmProblem for BaSolver<'_> {
                         continue;
                     };
                     let blk: Matrix6<f64> = y[a] * self.w[b].transpose();
-                    if ia == ib {
-                        let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ia);
-                        if a == b {
-                            view -= blk;
-                        } else {
-                            view -= blk + blk.transpose();
-                        }
-                    } else {
-                        let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ib);
-                        view -= blk;
-                        let mut view = s.fixed_view_mut::<6, 6>(6 * ib, 6 * ia);
-                        view -= blk.transpose();
-                    }
+                    s.subtract_pair(ia, ib, a == b, &blk);
                 }
             }
         }
         let dc = if n > 0 {
-            s.cholesky()?.solve(&rhs)
+            s.solve(rhs)?
         } else {
             DVector::zeros(0)
         };
@@ -484,6 +504,100 @@ impl LmProblem for BaSolver<'_> {
         std::mem::swap(&mut self.poses, &mut self.trial_poses);
         std::mem::swap(&mut self.points, &mut self.trial_points);
         self.cost = self.trial_cost;
+    }
+}
+
+/// Free keyframes from which the reduced camera system is stored by its envelope, in reverse
+/// Cuthill-McKee order: a global BA over a map that came back to its start. Below, the dense
+/// factorization is cheap (local BA's window of covisible keyframes couples nearly every pair
+/// anyway) and local BA keeps its results bit for bit.
+const ENVELOPE_MIN_KEYFRAMES: usize = 64;
+
+/// Which free keyframes (by variable index) observe a common point: the sparsity pattern of
+/// the reduced camera system.
+fn camera_coupling(problem: &BaProblem, kf_var: &[Option<usize>], n_var: usize) -> Adjacency {
+    let mut by_point: Vec<(usize, usize)> = problem
+        .observations
+        .iter()
+        .filter_map(|o| Some((o.point, kf_var[o.keyframe]?)))
+        .collect();
+    by_point.sort_unstable();
+    by_point.dedup();
+    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    for track in by_point.chunk_by(|a, b| a.0 == b.0) {
+        for (k, &(_, a)) in track.iter().enumerate() {
+            pairs.extend(track[k + 1..].iter().map(|&(_, b)| (b, a)));
+        }
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    Adjacency::from_edges(n_var, pairs)
+}
+
+/// The reduced camera system `S dx = rhs`: dense for a local window, an envelope matrix in
+/// reverse Cuthill-McKee order for a whole map.
+enum CameraSystem {
+    Dense(DMatrix<f64>),
+    Envelope(EnvelopeMatrix),
+}
+
+impl CameraSystem {
+    /// Sets the 6 x 6 diagonal block of free keyframe `i`.
+    fn set_diagonal_block(&mut self, i: usize, block: &Matrix6<f64>) {
+        match self {
+            CameraSystem::Dense(s) => s.fixed_view_mut::<6, 6>(6 * i, 6 * i).copy_from(block),
+            CameraSystem::Envelope(s) => s.add_diagonal_block6(i, block),
+        }
+    }
+
+    /// Subtracts one point's contribution `blk = Y_a W_b^T` coupling keyframes `ia` and `ib`
+    /// (and, unless it is the same observation, its transpose).
+    fn subtract_pair(&mut self, ia: usize, ib: usize, same: bool, blk: &Matrix6<f64>) {
+        match self {
+            CameraSystem::Dense(s) => {
+                if ia == ib {
+                    let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ia);
+                    if same {
+                        view -= blk;
+                    } else {
+                        view -= blk + blk.transpose();
+                    }
+                } else {
+                    let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ib);
+                    view -= blk;
+                    let mut view = s.fixed_view_mut::<6, 6>(6 * ib, 6 * ia);
+                    view -= blk.transpose();
+                }
+            }
+            CameraSystem::Envelope(s) => {
+                if ia == ib {
+                    if same {
+                        s.sub_block6(ia, ia, blk);
+                    } else {
+                        s.sub_block6(ia, ia, &(blk + blk.transpose()));
+                    }
+                } else if ia > ib {
+                    s.sub_block6(ia, ib, blk);
+                } else {
+                    s.sub_block6(ib, ia, &blk.transpose());
+                }
+            }
+        }
+    }
+
+    /// The camera step, `None` when `S` is not positive definite.
+    fn solve(self, rhs: DVector<f64>) -> Option<DVector<f64>> {
+        match self {
+            CameraSystem::Dense(s) => Some(s.cholesky()?.solve(&rhs)),
+            CameraSystem::Envelope(mut s) => {
+                if !s.cholesky() {
+                    return None;
+                }
+                let mut x = rhs;
+                s.solve_in_place(x.as_mut_slice());
+                Some(x)
+            }
+        }
     }
 }
 
@@ -634,7 +748,7 @@ mod tests {
         let mut rng = test_scene::rng(21);
         let s = synthetic(3, 1, 15, 1.0, 0.1, (0.02, 0.01), 0.05, &mut rng);
         for robust in [true, false] {
-            let mut solver = BaSolver::new(&s.camera, &s.problem);
+            let mut solver = BaSolver::new(&s.camera, &s.problem, ENVELOPE_MIN_KEYFRAMES);
             solver.set_active(&vec![true; s.problem.observations.len()], robust);
             solver.linearize().unwrap();
             let n_free = solver.n_var;
@@ -773,6 +887,43 @@ mod tests {
             false_alarms < n_obs / 10,
             "{false_alarms} good observations flagged"
         );
+    }
+
+    #[test]
+    fn the_envelope_solver_takes_the_dense_solver_s_steps() {
+        // 12 keyframes (2 fixed) with 1 % mismatches: the same two passes, the same outliers and
+        // the same estimate to rounding, whichever way the reduced camera system is stored.
+        let mut rng = test_scene::rng(31);
+        let s = synthetic(
+            12,
+            2,
+            800,
+            1.0,
+            0.01,
+            (0.05, 2f64.to_radians()),
+            0.3,
+            &mut rng,
+        );
+        let cfg = BaConfig::default();
+        let (mut dense, mut envelope) = (s.problem.clone(), s.problem.clone());
+        let dense_report = bundle_adjustment(&s.camera, &mut dense, &cfg, usize::MAX);
+        let envelope_report = bundle_adjustment(&s.camera, &mut envelope, &cfg, 0);
+        assert_eq!(dense_report.iterations, envelope_report.iterations);
+        assert_eq!(dense_report.outliers, envelope_report.outliers);
+        let rel =
+            (dense_report.final_cost - envelope_report.final_cost).abs() / dense_report.final_cost;
+        assert!(rel < 1e-9, "final cost differs by {rel}");
+        for (a, b) in dense.keyframes.iter().zip(&envelope.keyframes) {
+            let (dt, dr) = pose_error(&a.tcw, &b.tcw);
+            assert!(
+                dt < 1e-9 && dr < 1e-7,
+                "keyframe differs by {dt} m {dr} deg"
+            );
+        }
+        for (a, b) in dense.points.iter().zip(&envelope.points) {
+            assert!((a.position - b.position).norm() < 1e-8);
+        }
+        assert!(envelope.keyframes[5].tcw != s.problem.keyframes[5].tcw);
     }
 
     #[test]

@@ -13,6 +13,7 @@ mod lm;
 mod local_ba;
 #[cfg(test)]
 pub(crate) mod numdiff;
+mod ordering;
 mod pose_graph;
 mod pose_only;
 mod residual;

@@ -6,14 +6,16 @@
 //! Edge `(i, j)` measures `M = T_i T_j^-1` (both `Tcw`). Its residual is the 6-vector
 //! `[log_so3(R_E); t_E]` of `E = M^-1 T_i T_j^-1`, zero when the two poses keep the measured
 //! relative pose; every edge has identity information (as ORB-SLAM2's essential graph). The
-//! Jacobians are exact (checked against finite differences), the normal equations are stored
-//! by their envelope in vertex order ([`super::envelope`]) and solved by Levenberg-Marquardt with
-//! the damping schedule of [`super::lm`].
+//! Jacobians are exact (checked against finite differences); the free vertices are numbered in
+//! reverse Cuthill-McKee order ([`super::ordering`]), the normal equations stored by their
+//! envelope ([`super::envelope`]) and solved by Levenberg-Marquardt with the damping schedule of
+//! [`super::lm`].
 
 use nalgebra::{Isometry3, Matrix3, Matrix6, Vector3};
 
 use super::envelope::EnvelopeMatrix;
 use super::lm::{levenberg_marquardt, LmProblem};
+use super::ordering::{inverse_permutation, Adjacency};
 use crate::geometry::{exp_se3, log_so3, skew, so3_left_jacobian_inverse, Vector6};
 
 /// A relative-pose constraint between vertices `i` and `j`.
@@ -140,24 +142,26 @@ struct PoseGraphSolver<'a> {
 
 impl<'a> PoseGraphSolver<'a> {
     fn new(graph: &'a PoseGraph) -> Self {
-        let mut n = 0;
-        let var: Vec<Option<usize>> = graph
-            .fixed
-            .iter()
-            .map(|&f| {
-                (!f).then(|| {
-                    n += 1;
-                    n - 1
-                })
-            })
+        // Free vertices in id order, then renumbered by reverse Cuthill-McKee over the edges
+        // that couple two of them.
+        let free: Vec<usize> = (0..graph.poses.len())
+            .filter(|&k| !graph.fixed[k])
             .collect();
-        let mut first_block: Vec<usize> = (0..n).collect();
-        for e in &graph.edges {
-            if let (Some(a), Some(b)) = (var[e.i], var[e.j]) {
-                let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-                first_block[hi] = first_block[hi].min(lo);
-            }
+        let mut free_index = vec![None; graph.poses.len()];
+        for (f, &k) in free.iter().enumerate() {
+            free_index[k] = Some(f);
         }
+        let coupling = Adjacency::from_edges(
+            free.len(),
+            graph
+                .edges
+                .iter()
+                .filter_map(|e| Some((free_index[e.i]?, free_index[e.j]?))),
+        );
+        let position = inverse_permutation(&coupling.reverse_cuthill_mckee());
+        let var: Vec<Option<usize>> = free_index.iter().map(|f| f.map(|f| position[f])).collect();
+        let first_block = coupling.envelope_first(&position);
+        let n = first_block.len();
         let poses = graph.poses.clone();
         let cost = cost_at(&graph.edges, &poses);
         PoseGraphSolver {
