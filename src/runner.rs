@@ -3,10 +3,15 @@
 //! frame the ground truth is expressed in (EuRoC: body frame via T_BS).
 
 use ate_eval::{evaluate_ate, AteOptions, AteResult, Trajectory};
-use datasets::Sequence;
+use datasets::{DatasetError, FrameReader, Sequence};
+use rayon::prelude::*;
+use slam_core::data::Features;
+use slam_core::feature::{OrbConfig, OrbExtractor};
+use slam_core::frame::extract_features;
 use slam_core::module::loop_closing::LoopEvent;
 use slam_core::place::Vocabulary;
 use slam_core::system::{Config, FrameStats, System};
+use slam_core::{Camera, FrameInput};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -35,7 +40,8 @@ pub struct RunOutcome {
     pub loop_closing: bool,
     /// Loops closed, in order.
     pub loops: Vec<ClosedLoop>,
-    /// Wall time of the run, seconds (single thread).
+    /// Wall time of the run, seconds (single thread), including its features' extraction
+    /// (when they were extracted once for several runs: the time that extraction took).
     pub wall_s: f64,
     /// The failure verdict ('F').
     pub failed: bool,
@@ -98,10 +104,133 @@ impl RunOutcome {
     }
 }
 
+/// One frame's features, extracted once and shared read-only by every run that tracks it.
+#[derive(Clone, Debug)]
+pub struct ExtractedFrame {
+    /// Capture time, seconds.
+    pub timestamp: f64,
+    /// Keypoints, descriptors, depth / right coordinate and grid.
+    pub features: Arc<Features>,
+    /// What the extraction took on one core, milliseconds (reported as the frame's feature
+    /// time by every run, so per-run figures stay comparable with in-run extraction).
+    pub extraction_ms: f64,
+}
+
+/// A sequence's frames as features for one set of ORB settings: what a sweep's runs share, so
+/// that each frame is extracted once per sequence and not once per run.
+#[derive(Clone, Debug)]
+pub struct ExtractedSequence {
+    /// The ORB settings the features were extracted with.
+    pub orb: OrbConfig,
+    /// One entry per frame of the sequence, in order.
+    pub frames: Vec<ExtractedFrame>,
+}
+
+impl ExtractedSequence {
+    /// Reads every frame of `frames` and extracts its features once with each of `orbs`, in
+    /// parallel over frames on the current rayon pool; a frame's images are dropped as soon as
+    /// its features exist, so no more than one decoded frame per worker is ever held. The first
+    /// unreadable frame (in frame order) is the error.
+    pub fn extract_all(
+        frames: &FrameReader,
+        camera: &Camera,
+        orbs: &[OrbConfig],
+        on_frame: impl Fn() + Sync,
+    ) -> Result<Vec<Self>, DatasetError> {
+        extract_each(frames.len(), |i| frames.read(i), camera, orbs, on_frame)
+    }
+
+    /// Heap bytes of all frames' features.
+    pub fn heap_bytes(&self) -> usize {
+        self.frames.iter().map(|f| f.features.heap_bytes()).sum()
+    }
+
+    /// Total extraction time, seconds of one core.
+    pub fn extraction_s(&self) -> f64 {
+        self.frames.iter().map(|f| f.extraction_ms).sum::<f64>() / 1e3
+    }
+}
+
+/// Frame `i` of `n` read by `read`, extracted once per ORB setting, in parallel over frames.
+fn extract_each(
+    n: usize,
+    read: impl Fn(usize) -> Result<FrameInput, DatasetError> + Sync,
+    camera: &Camera,
+    orbs: &[OrbConfig],
+    on_frame: impl Fn() + Sync,
+) -> Result<Vec<ExtractedSequence>, DatasetError> {
+    let per_frame: Vec<Result<Vec<ExtractedFrame>, DatasetError>> = (0..n)
+        .into_par_iter()
+        .map_init(
+            || -> Vec<OrbExtractor> { orbs.iter().cloned().map(OrbExtractor::new).collect() },
+            |extractors, i| {
+                let input = read(i)?;
+                let frames = extractors
+                    .iter_mut()
+                    .map(|extractor| {
+                        let t = Instant::now();
+                        let features = Arc::new(extract_features(&input, camera, extractor));
+                        ExtractedFrame {
+                            timestamp: input.timestamp,
+                            features,
+                            extraction_ms: t.elapsed().as_secs_f64() * 1e3,
+                        }
+                    })
+                    .collect();
+                on_frame();
+                Ok(frames)
+            },
+        )
+        .collect();
+    let mut out: Vec<ExtractedSequence> = orbs
+        .iter()
+        .map(|orb| ExtractedSequence {
+            orb: orb.clone(),
+            frames: Vec::with_capacity(n),
+        })
+        .collect();
+    for frame in per_frame {
+        for (seq, f) in out.iter_mut().zip(frame?) {
+            seq.frames.push(f);
+        }
+    }
+    Ok(out)
+}
+
 /// Runs `config` over `seq` with place recognition over `vocabulary` (brute-force stand-ins
-/// without one), calling `on_frame` after each frame (for progress bars).
+/// without one), extracting each frame's features in the run, calling `on_frame` after each
+/// frame (for progress bars).
 pub fn run_sequence(
     seq: &Sequence,
+    config: &Config,
+    vocabulary: Option<&Arc<Vocabulary>>,
+    on_frame: impl FnMut(usize),
+) -> RunOutcome {
+    run(seq, None, config, vocabulary, on_frame)
+}
+
+/// As [`run_sequence`], tracking features extracted beforehand (`seq.frames` may then be empty:
+/// the images are no longer needed). The result is the same, bit for bit.
+///
+/// # Panics
+/// When `extracted` was made with other ORB settings than `config`'s (a caller bug).
+pub fn run_extracted(
+    seq: &Sequence,
+    extracted: &ExtractedSequence,
+    config: &Config,
+    vocabulary: Option<&Arc<Vocabulary>>,
+    on_frame: impl FnMut(usize),
+) -> RunOutcome {
+    assert_eq!(
+        extracted.orb, config.orb,
+        "features extracted with other ORB settings than the run's"
+    );
+    run(seq, Some(extracted), config, vocabulary, on_frame)
+}
+
+fn run(
+    seq: &Sequence,
+    extracted: Option<&ExtractedSequence>,
     config: &Config,
     vocabulary: Option<&Arc<Vocabulary>>,
     mut on_frame: impl FnMut(usize),
@@ -111,13 +240,22 @@ pub fn run_sequence(
         Some(v) => System::with_vocabulary(seq.camera.clone(), config.clone(), v.clone()),
         None => System::new(seq.camera.clone(), config.clone()),
     };
-    let mut stats = Vec::with_capacity(seq.frames.len());
-    for (i, frame) in seq.frames.iter().enumerate() {
-        let r = system.track(frame);
+    let frames = extracted.map_or(seq.frames.len(), |e| e.frames.len());
+    let mut stats = Vec::with_capacity(frames);
+    for i in 0..frames {
+        let r = match extracted {
+            None => system.track(&seq.frames[i]),
+            Some(e) => {
+                let f = &e.frames[i];
+                system.track_features(f.timestamp, f.features.clone(), f.extraction_ms)
+            }
+        };
         stats.push(r.stats);
         on_frame(i + 1);
     }
-    let wall_s = start.elapsed().as_secs_f64();
+    // A run on shared features is charged what their extraction took, so its time and frames
+    // per second stay those of a run that extracts for itself.
+    let wall_s = start.elapsed().as_secs_f64() + extracted.map_or(0.0, |e| e.extraction_s());
     let closing_frames = stats.iter().enumerate().filter(|(_, s)| s.loop_closed);
     let loops: Vec<ClosedLoop> = closing_frames
         .zip(system.loops())
@@ -158,7 +296,6 @@ pub fn run_sequence(
         };
         evaluate_ate(gt, &est, &AteOptions::default()).ok()
     });
-    let frames = seq.frames.len();
     let failed = ate.is_none() && seq.groundtruth.is_some()
         || (tracked as f64) < MIN_TRACKED_FRACTION * frames as f64;
     RunOutcome {
@@ -173,5 +310,152 @@ pub fn run_sequence(
         loops,
         wall_s,
         failed,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config_file::{apply_switches, base_config, Switches};
+    use crate::select::{load, open, LoadOptions, Source};
+    use crate::vocab_file::choose;
+    use datasets::Catalog;
+    use std::path::PathBuf;
+
+    fn options(frames: usize) -> LoadOptions {
+        LoadOptions {
+            data_dir: PathBuf::new(),
+            frames: Some(frames),
+            synth_seed: 1,
+        }
+    }
+
+    /// A preset's first frames decoded, the sequence as a sweep opens it (without frames), and
+    /// the features extracted with `orb` through a frame reader as a sweep extracts them.
+    fn decoded_and_extracted(
+        preset: &str,
+        frames: usize,
+        orb: impl Fn(&Sequence) -> OrbConfig,
+    ) -> (Sequence, Sequence, ExtractedSequence) {
+        let source = Source::Catalog(preset.into());
+        let catalog = Catalog::embedded();
+        let seq = load(&source, &catalog, &options(frames)).expect("a preset");
+        let (opened, _) = open(&source, &catalog, &options(frames)).expect("a preset");
+        assert!(opened.frames.is_empty());
+        let decoded = seq.frames.clone();
+        let reader = FrameReader::new(frames, move |i| Ok(decoded[i].clone()));
+        let orb = orb(&seq);
+        let extracted =
+            ExtractedSequence::extract_all(&reader, &opened.camera, &[orb], || {}).expect("frames");
+        (
+            seq,
+            opened,
+            extracted.into_iter().next().expect("one ORB setting"),
+        )
+    }
+
+    #[test]
+    fn an_opened_sequence_reads_the_frames_a_loaded_one_holds() {
+        for preset in ["kinect", "stereo"] {
+            let source = Source::Catalog(preset.into());
+            let catalog = Catalog::embedded();
+            let seq = load(&source, &catalog, &options(3)).expect("a preset");
+            let (opened, reader) = open(&source, &catalog, &options(3)).expect("a preset");
+            assert_eq!(reader.len(), 3);
+            assert_eq!(opened.groundtruth, seq.groundtruth);
+            assert_eq!(opened.camera, seq.camera);
+            for (i, want) in seq.frames.iter().enumerate() {
+                let got = reader.read(i).expect("a frame");
+                assert_eq!(got.timestamp, want.timestamp);
+                assert_eq!(got.image, want.image);
+                assert_eq!(got.depth, want.depth);
+                assert_eq!(got.right, want.right);
+            }
+        }
+    }
+
+    /// Per-frame statistics without the wall-clock timings.
+    fn untimed(stats: &[FrameStats]) -> Vec<FrameStats> {
+        stats
+            .iter()
+            .map(|s| FrameStats {
+                time_features_ms: 0.0,
+                time_tracking_ms: 0.0,
+                time_mapping_ms: 0.0,
+                time_ba_ms: 0.0,
+                time_loop_ms: 0.0,
+                ..s.clone()
+            })
+            .collect()
+    }
+
+    /// Runs `seq` in each configuration `(mcor, avc)` with and without the mapping lag, once
+    /// extracting in the run and once on features extracted beforehand, and compares them.
+    fn assert_shared_features_change_nothing(
+        preset: &str,
+        frames: usize,
+        configs: &[(bool, bool)],
+        vocabulary: Option<&Arc<Vocabulary>>,
+    ) {
+        let (seq, without_images, extracted) =
+            decoded_and_extracted(preset, frames, |s| base_config(s.camera.sensor).orb);
+        let base = base_config(seq.camera.sensor);
+        assert_eq!(extracted.frames.len(), frames);
+        assert_eq!(without_images.groundtruth, seq.groundtruth);
+        let per_frame = extracted.heap_bytes() / frames;
+        assert!(
+            per_frame < 100 * 1024,
+            "{preset}: {per_frame} bytes per frame"
+        );
+        let runs: Vec<(bool, bool, u32)> = configs
+            .iter()
+            .flat_map(|&(mcor, avc)| [(mcor, avc, 0), (mcor, avc, 3)])
+            .collect();
+        runs.par_iter().for_each(|&(mcor, avc, lag)| {
+            let switches = Switches {
+                mcor,
+                avc,
+                mapping_lag: Some(lag),
+                no_loop_closing: false,
+            };
+            let mut cfg = apply_switches(base.clone(), switches);
+            cfg.seed = 7;
+            let what = format!("{preset} mcor {mcor} avc {avc} lag {lag}");
+            let inline = run_sequence(&seq, &cfg, vocabulary, |_| {});
+            let shared = run_extracted(&without_images, &extracted, &cfg, vocabulary, |_| {});
+            assert!(inline.tracked > frames / 2, "{what}: tracking lost");
+            assert_eq!(inline.trajectory, shared.trajectory, "{what}: trajectory");
+            assert_eq!(untimed(&inline.stats), untimed(&shared.stats), "{what}");
+            assert_eq!(
+                (inline.keyframes, inline.map_points, inline.loops.len()),
+                (shared.keyframes, shared.map_points, shared.loops.len()),
+                "{what}: map"
+            );
+            for (s, f) in shared.stats.iter().zip(&extracted.frames) {
+                assert_eq!(s.time_features_ms, f.extraction_ms);
+            }
+        });
+    }
+
+    #[test]
+    fn runs_on_shared_features_are_bit_identical_to_runs_that_extract() {
+        let vocabulary = choose(None).expect("the shipped vocabulary").vocabulary;
+        // RGB-D in all four configurations; stereo (whose extraction also matches the right
+        // image) in the baseline and with both techniques; each with and without the lag.
+        let all = [(false, false), (true, false), (false, true), (true, true)];
+        assert_shared_features_change_nothing("kinect", 70, &all, vocabulary.as_ref());
+        let two = [(false, false), (true, true)];
+        assert_shared_features_change_nothing("stereo", 50, &two, vocabulary.as_ref());
+    }
+
+    #[test]
+    #[should_panic(expected = "other ORB settings")]
+    fn features_of_other_orb_settings_are_refused() {
+        let (seq, _, extracted) = decoded_and_extracted("kinect", 2, |s| OrbConfig {
+            n_features: 500,
+            ..base_config(s.camera.sensor).orb
+        });
+        let cfg = base_config(seq.camera.sensor);
+        run_extracted(&seq, &extracted, &cfg, None, |_| {});
     }
 }

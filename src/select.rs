@@ -2,7 +2,7 @@
 //! embedded synthetic default) into a decoded [`Sequence`].
 
 use anyhow::{bail, Context, Result};
-use datasets::{Catalog, Sequence};
+use datasets::{Catalog, FrameReader, Sequence};
 use std::path::{Path, PathBuf};
 
 /// Synthetic preset of the embedded default (`noisefree run` with no sequence): RGB-D with the
@@ -52,11 +52,26 @@ pub struct LoadOptions {
     pub synth_seed: u64,
 }
 
-/// Loads (or generates) the sequence of `source`.
+/// Loads (or generates) the sequence of `source`, every frame decoded.
 pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Sequence> {
-    let mut seq = match source {
+    let (mut seq, frames) = open(source, catalog, opts)?;
+    seq.frames = frames
+        .read_all()
+        .with_context(|| format!("loading {}", source.label()))?;
+    Ok(seq)
+}
+
+/// Opens the sequence of `source`: camera, ground truth and frame list now, the frames when the
+/// reader reads (or renders) them; `seq.frames` stays empty. With `--frames N` the reader
+/// holds the first N frames.
+pub fn open(
+    source: &Source,
+    catalog: &Catalog,
+    opts: &LoadOptions,
+) -> Result<(Sequence, FrameReader)> {
+    let (seq, mut frames) = match source {
         Source::Path(p) => {
-            datasets::load_path(p).with_context(|| format!("loading {}", p.display()))?
+            datasets::open_path(p).with_context(|| format!("loading {}", p.display()))?
         }
         Source::Catalog(name) => {
             let entry = catalog.get(name)?;
@@ -67,9 +82,9 @@ pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Se
                 if n == 0 {
                     bail!("--frames must be at least 1");
                 }
-                let mut s = datasets::from_synth(&generator, n);
+                let (mut s, frames) = datasets::open_synth(&generator, n);
                 s.name = entry.name.clone();
-                s
+                (s, frames)
             } else {
                 let dir = entry
                     .path(&opts.data_dir)
@@ -82,30 +97,28 @@ pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Se
                         dir.display()
                     );
                 }
-                let mut s = datasets::load_path(&dir)
+                let (mut s, frames) = datasets::open_path(&dir)
                     .with_context(|| format!("loading {}", dir.display()))?;
                 s.name = entry.name.clone();
-                s
+                (s, frames)
             }
         }
     };
-    if let (Some(n), Source::Path(_)) = (opts.frames, source) {
-        seq.frames.truncate(n);
-    }
-    if let (Some(n), Source::Catalog(name)) = (opts.frames, source) {
-        if catalog
+    let real = match source {
+        Source::Path(_) => true,
+        Source::Catalog(name) => catalog
             .get(name)
             .map(|e| e.preset.is_none())
-            .unwrap_or(false)
-        {
-            seq.frames.truncate(n);
-        }
+            .unwrap_or(false),
+    };
+    if let (Some(n), true) = (opts.frames, real) {
+        frames.truncate(n);
     }
-    if seq.frames.is_empty() {
+    if frames.is_empty() {
         bail!("sequence {} has no frames", source.label());
     }
     for note in &seq.notes {
         eprintln!("warning: {note}");
     }
-    Ok(seq)
+    Ok((seq, frames))
 }

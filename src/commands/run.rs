@@ -3,8 +3,8 @@
 //! CSV and a JSON summary, and printing the ATE where ground truth exists.
 
 use crate::config_file::{apply_switches, base_config, config_name, overlay_file, Switches};
-use crate::runner::{run_sequence, RunOutcome};
-use crate::select::{load, LoadOptions, Source};
+use crate::runner::{run_extracted, run_sequence, ExtractedSequence, RunOutcome};
+use crate::select::{load, open, LoadOptions, Source};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{write_atomic, write_tum};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -157,7 +157,15 @@ pub fn run(args: RunArgs) -> Result<()> {
     if !args.quiet {
         eprintln!("loading {label} ...");
     }
-    let seq = load(&source, &catalog, &opts)?;
+    // Several runs share every frame's features, extracted once as the frames are read; a
+    // single run decodes the sequence and extracts as it tracks.
+    let (seq, reader) = if args.runs > 1 {
+        let (seq, frames) = open(&source, &catalog, &opts)?;
+        (seq, Some(frames))
+    } else {
+        (load(&source, &catalog, &opts)?, None)
+    };
+    let n_frames = reader.as_ref().map_or(seq.len(), |r| r.len());
     let mut config = base_config(seq.camera.sensor);
     if let Some(p) = &args.config {
         config = overlay_file(&config, p)?;
@@ -186,7 +194,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     if !args.quiet {
         eprintln!(
             "{label}: {} frames, {} camera, config {cname}, {} run(s), output {}",
-            seq.len(),
+            n_frames,
             if seq.camera.sensor == slam_core::SensorKind::Rgbd {
                 "RGB-D"
             } else {
@@ -210,18 +218,37 @@ pub fn run(args: RunArgs) -> Result<()> {
         .num_threads(args.jobs.unwrap_or(0))
         .build()
         .context("starting the worker pool")?;
+    let extracted = match &reader {
+        Some(frames) => {
+            let bar = multi.add(ProgressBar::new(n_frames as u64));
+            bar.set_style(style.clone());
+            bar.set_prefix("features");
+            let orbs = std::slice::from_ref(&config.orb);
+            let mut e = pool
+                .install(|| {
+                    ExtractedSequence::extract_all(frames, &seq.camera, orbs, || bar.inc(1))
+                })
+                .with_context(|| format!("reading the frames of {label}"))?;
+            bar.finish_and_clear();
+            Some(e.remove(0))
+        }
+        None => None,
+    };
     let results: Vec<(u64, RunOutcome)> = pool.install(|| {
         seeds
             .par_iter()
             .map(|&seed| {
-                let bar = multi.add(ProgressBar::new(seq.len() as u64));
+                let bar = multi.add(ProgressBar::new(n_frames as u64));
                 bar.set_style(style.clone());
                 bar.set_prefix(format!("seed {seed}"));
                 let mut cfg = config.clone();
                 cfg.seed = seed;
-                let o = run_sequence(&seq, &cfg, vocabulary.vocabulary.as_ref(), |i| {
-                    bar.set_position(i as u64)
-                });
+                let vocabulary = vocabulary.vocabulary.as_ref();
+                let progress = |i: usize| bar.set_position(i as u64);
+                let o = match &extracted {
+                    Some(e) => run_extracted(&seq, e, &cfg, vocabulary, progress),
+                    None => run_sequence(&seq, &cfg, vocabulary, progress),
+                };
                 bar.finish_and_clear();
                 (seed, o)
             })

@@ -3,8 +3,8 @@
 //! and shardable over a cluster's job array.
 
 use crate::config_file::{base_config, overlay_file};
-use crate::runner::run_sequence;
-use crate::select::{load, LoadOptions, Source};
+use crate::runner::{run_extracted, ExtractedSequence};
+use crate::select::{open, LoadOptions, Source};
 use crate::sweep::plan::{expand, parse_values, ConfigKind, Grids, Job, Shard};
 use crate::sweep::store::{pin_settings, FolderSettings, RunRecord, RunStore};
 use anyhow::{bail, Context, Result};
@@ -12,6 +12,7 @@ use ate_eval::io::{write_atomic, write_tum};
 use datasets::{Catalog, Class, EntryFormat};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
+use slam_core::feature::OrbConfig;
 use slam_core::place::Vocabulary;
 use slam_core::system::Config;
 use std::path::{Path, PathBuf};
@@ -318,7 +319,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 synth_seed: synth_seed.unwrap_or(args.synth_seed),
                 ..load_opts.clone()
             };
-            let seq = load(src, &catalog, &opts)?;
+            let (seq, frames) = open(src, &catalog, &opts)?;
             if let Some(gt) = &seq.groundtruth {
                 // The figures draw seed 0; its realization's ground truth goes beside it.
                 if jobs.iter().any(|j| j.seed == 0) {
@@ -342,6 +343,46 @@ pub fn run(args: SweepArgs) -> Result<()> {
             if args.no_loop_closing {
                 base.loop_closing.enabled = false;
             }
+            // Every frame's features once for each set of ORB settings the runs use, shared
+            // read-only by the runs; frames are read (or rendered) and extracted as they go,
+            // so the decoded sequence never sits in memory.
+            let mut orbs: Vec<OrbConfig> = Vec::new();
+            for job in &jobs {
+                let orb = job_config(&base, job).orb;
+                if !orbs.contains(&orb) {
+                    orbs.push(orb);
+                }
+            }
+            let t_extract = Instant::now();
+            let fbar = multi.add(ProgressBar::new(frames.len() as u64));
+            fbar.set_style(
+                ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} frames")
+                    .expect("static template")
+                    .progress_chars("=> "),
+            );
+            fbar.set_prefix(format!("{label} features"));
+            let extracted = pool
+                .install(|| {
+                    ExtractedSequence::extract_all(&frames, &seq.camera, &orbs, || fbar.inc(1))
+                })
+                .with_context(|| format!("reading the frames of {label}"))?;
+            fbar.finish_and_clear();
+            drop(frames);
+            if !args.quiet {
+                let n: usize = extracted.iter().map(|e| e.frames.len()).sum();
+                let bytes: usize = extracted.iter().map(ExtractedSequence::heap_bytes).sum();
+                let cpu: f64 = extracted.iter().map(ExtractedSequence::extraction_s).sum();
+                // Printed even when stderr is not a terminal (indicatif then hides its own lines).
+                multi.suspend(|| {
+                    eprintln!(
+                        "{label}: features of {n} frames in {:.1} s ({cpu:.1} s of one core, \
+                         {:.0} KB per frame, shared by {} runs)",
+                        t_extract.elapsed().as_secs_f64(),
+                        bytes as f64 / 1024.0 / n.max(1) as f64,
+                        jobs.len()
+                    )
+                });
+            }
             let bar = multi.add(ProgressBar::new(jobs.len() as u64));
             bar.set_style(
                 ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} runs")
@@ -359,8 +400,14 @@ pub fn run(args: SweepArgs) -> Result<()> {
                         if started_runs.fetch_add(1, Ordering::SeqCst) >= max_runs {
                             return Ok(());
                         }
-                        let rec =
-                            run_job(&seq, &base, vocabulary.vocabulary.as_ref(), job, &args.out)?;
+                        let rec = run_job(
+                            &seq,
+                            &extracted,
+                            &base,
+                            vocabulary.vocabulary.as_ref(),
+                            job,
+                            &args.out,
+                        )?;
                         store.append(&rec)?;
                         finished.fetch_add(1, Ordering::SeqCst);
                         bar.inc(1);
@@ -387,17 +434,23 @@ pub fn run(args: SweepArgs) -> Result<()> {
     Ok(())
 }
 
-/// Runs one job on a decoded sequence, writes its trajectory (in the ground truth's frame, for
-/// the figures) and, for seed 0, its per-frame statistics; returns its record.
+/// Runs one job on a sequence's extracted features (those with the job's ORB settings), writes
+/// its trajectory (in the ground truth's frame, for the figures) and, for seed 0, its
+/// per-frame statistics; returns its record.
 fn run_job(
     seq: &datasets::Sequence,
+    extracted: &[ExtractedSequence],
     base: &Config,
     vocabulary: Option<&Arc<Vocabulary>>,
     job: &Job,
     out: &Path,
 ) -> Result<RunRecord> {
     let cfg = job_config(base, job);
-    let o = run_sequence(seq, &cfg, vocabulary, |_| {});
+    let features = extracted
+        .iter()
+        .find(|e| e.orb == cfg.orb)
+        .context("no features extracted with the run's ORB settings")?;
+    let o = run_extracted(seq, features, &cfg, vocabulary, |_| {});
     let dir = out
         .join("trajectories")
         .join(&job.sequence)

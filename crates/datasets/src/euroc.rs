@@ -6,9 +6,8 @@
 use crate::decode::read_gray;
 use crate::rectify::{RawCamera, StereoRectification};
 use crate::tum::{associate, check_size, folder_name};
-use crate::{DatasetError, Format, Sequence};
+use crate::{DatasetError, Format, FrameReader, Sequence};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
-use rayon::prelude::*;
 use slam_core::{Distortion, FrameInput};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -244,6 +243,17 @@ pub fn load_euroc(dir: &Path) -> Result<Sequence, DatasetError> {
 
 /// Loads an EuRoC folder with explicit options.
 pub fn load_euroc_with(dir: &Path, opts: &EurocOptions) -> Result<Sequence, DatasetError> {
+    let (mut seq, frames) = open_euroc_with(dir, opts)?;
+    seq.frames = frames.read_all()?;
+    Ok(seq)
+}
+
+/// Opens an EuRoC folder: sensor files, frame lists, rectification and ground truth are read
+/// now, the images when the returned reader reads them (the sequence's `frames` stay empty).
+pub fn open_euroc_with(
+    dir: &Path,
+    opts: &EurocOptions,
+) -> Result<(Sequence, FrameReader), DatasetError> {
     let mav0 = mav0_of(dir)?;
     let name = if mav0 == dir {
         dir.parent()
@@ -275,26 +285,24 @@ pub fn load_euroc_with(dir: &Path, opts: &EurocOptions) -> Result<Sequence, Data
         ));
     }
     let (w, h) = (left.width as usize, left.height as usize);
-    let frames = pairs
-        .par_iter()
-        .map(|&(i, j)| -> Result<FrameInput, DatasetError> {
-            let lp = mav0.join("cam0/data").join(&rows0[i].file);
-            let rp = mav0.join("cam1/data").join(&rows1[j].file);
-            let l = read_gray(&lp)?;
-            check_size(&lp, l.width, l.height, w, h, "cam0/sensor.yaml resolution")?;
-            let r = read_gray(&rp)?;
-            check_size(&rp, r.width, r.height, w, h, "cam1/sensor.yaml resolution")?;
-            Ok(FrameInput {
-                timestamp: t0[i],
-                image: Arc::new(rect.rectify_left(&l)),
-                depth: None,
-                right: Some(Arc::new(rect.rectify_right(&r))),
-            })
+    let th_depth = opts.th_depth.unwrap_or(EUROC_TH_DEPTH);
+    let (camera, t_bs) = (rect.camera(th_depth), rect.t_b_left);
+    let data = mav0.clone();
+    let frames = FrameReader::new(pairs.len(), move |k| {
+        let (i, j) = pairs[k];
+        let lp = data.join("cam0/data").join(&rows0[i].file);
+        let rp = data.join("cam1/data").join(&rows1[j].file);
+        let l = read_gray(&lp)?;
+        check_size(&lp, l.width, l.height, w, h, "cam0/sensor.yaml resolution")?;
+        let r = read_gray(&rp)?;
+        check_size(&rp, r.width, r.height, w, h, "cam1/sensor.yaml resolution")?;
+        Ok(FrameInput {
+            timestamp: t0[i],
+            image: Arc::new(rect.rectify_left(&l)),
+            depth: None,
+            right: Some(Arc::new(rect.rectify_right(&r))),
         })
-        .collect::<Vec<Result<FrameInput, DatasetError>>>()
-        // First error in frame order, whatever thread hit it first.
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()?;
+    });
     let gt_path = mav0.join("state_groundtruth_estimate0/data.csv");
     let mut notes = Vec::new();
     let groundtruth = if gt_path.is_file() {
@@ -306,16 +314,16 @@ pub fn load_euroc_with(dir: &Path, opts: &EurocOptions) -> Result<Sequence, Data
     } else {
         None
     };
-    let th_depth = opts.th_depth.unwrap_or(EUROC_TH_DEPTH);
-    Ok(Sequence {
+    let seq = Sequence {
         name,
-        camera: rect.camera(th_depth),
-        frames,
+        camera,
+        frames: Vec::new(),
         groundtruth,
-        t_bs: Some(rect.t_b_left),
+        t_bs: Some(t_bs),
         format: Format::EurocStereo,
         notes,
-    })
+    };
+    Ok((seq, frames))
 }
 
 #[cfg(test)]

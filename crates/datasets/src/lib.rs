@@ -26,10 +26,10 @@ pub mod tum;
 pub use cameras::CameraId;
 pub use catalog::{data_root, Ate, Catalog, Class, Entry, EntryFormat, PaperAte};
 pub use error::DatasetError;
-pub use euroc::{load_euroc, load_euroc_with, EurocOptions};
-pub use sequence::{Format, Sequence};
-pub use synthetic::from_synth;
-pub use tum::{load_tum, load_tum_with, TumOptions};
+pub use euroc::{load_euroc, load_euroc_with, open_euroc_with, EurocOptions};
+pub use sequence::{Format, FrameReader, Sequence};
+pub use synthetic::{from_synth, open_synth};
+pub use tum::{load_tum, load_tum_with, open_tum_with, TumOptions};
 
 use std::path::Path;
 
@@ -47,6 +47,14 @@ pub fn detect_format(dir: &Path) -> Option<Format> {
 
 /// Loads any TUM RGB-D or EuRoC folder with default options, detecting its layout.
 pub fn load_path(dir: &Path) -> Result<Sequence, DatasetError> {
+    let (mut seq, frames) = open_path(dir)?;
+    seq.frames = frames.read_all()?;
+    Ok(seq)
+}
+
+/// As [`load_path`], leaving the images to the returned reader (the sequence's `frames` stay
+/// empty): for callers that turn frames into something smaller as they go.
+pub fn open_path(dir: &Path) -> Result<(Sequence, FrameReader), DatasetError> {
     if !dir.is_dir() {
         return Err(DatasetError::Missing {
             path: dir.to_path_buf(),
@@ -54,8 +62,8 @@ pub fn load_path(dir: &Path) -> Result<Sequence, DatasetError> {
         });
     }
     match detect_format(dir) {
-        Some(Format::EurocStereo) => load_euroc(dir),
-        Some(Format::TumRgbd) => load_tum(dir, None),
+        Some(Format::EurocStereo) => open_euroc_with(dir, &EurocOptions::default()),
+        Some(Format::TumRgbd) => open_tum_with(dir, &TumOptions::default()),
         None => Err(DatasetError::invalid(
             dir,
             "neither a TUM RGB-D folder (rgb.txt, depth.txt) nor an EuRoC folder (mav0/); \

@@ -6,8 +6,13 @@
 //! 0.72 MB (two u8 images), ~2.7 GB for MH01's 3682 frames. Cloning a `Sequence` is cheap
 //! (images are `Arc`s); load it once and hand clones or references to each run.
 
+use std::sync::Arc;
+
 use nalgebra::Isometry3;
+use rayon::prelude::*;
 use slam_core::{Camera, FrameInput};
+
+use crate::DatasetError;
 
 /// Which dataset layout a sequence came from: it decides how estimates are compared with
 /// ground truth (EuRoC ground truth is the body frame, see [`Sequence::t_bs`]).
@@ -66,5 +71,79 @@ impl Sequence {
                     + f.right.as_ref().map_or(0, |r| r.data.len())
             })
             .sum()
+    }
+}
+
+/// Reads one frame of a sequence.
+type ReadFrame = dyn Fn(usize) -> Result<FrameInput, DatasetError> + Send + Sync;
+
+/// The frames of an opened sequence, read (decoded from disk, or rendered) on demand, so a
+/// caller that turns frames into something smaller (a sweep extracting features) holds only a
+/// few decoded frames at a time instead of the whole sequence (see the memory note above).
+#[derive(Clone)]
+pub struct FrameReader {
+    len: usize,
+    read: Arc<ReadFrame>,
+}
+
+impl std::fmt::Debug for FrameReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "FrameReader({} frames)", self.len)
+    }
+}
+
+impl FrameReader {
+    /// `len` frames, frame `i` read by `read(i)`.
+    pub fn new(
+        len: usize,
+        read: impl Fn(usize) -> Result<FrameInput, DatasetError> + Send + Sync + 'static,
+    ) -> Self {
+        FrameReader {
+            len,
+            read: Arc::new(read),
+        }
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no frames.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Keeps only the first `n` frames.
+    pub fn truncate(&mut self, n: usize) {
+        self.len = self.len.min(n);
+    }
+
+    /// Reads frame `i` (a file that cannot be read or has the wrong size is an error naming it).
+    ///
+    /// # Panics
+    /// When `i >= len()` (a caller bug).
+    pub fn read(&self, i: usize) -> Result<FrameInput, DatasetError> {
+        assert!(i < self.len, "frame {i} of {}", self.len);
+        (self.read)(i)
+    }
+
+    /// Frames `range`, read in parallel with rayon; the first error in frame order, whatever
+    /// thread hit it first.
+    pub fn read_range(
+        &self,
+        range: std::ops::Range<usize>,
+    ) -> Result<Vec<FrameInput>, DatasetError> {
+        range
+            .into_par_iter()
+            .map(|i| self.read(i))
+            .collect::<Vec<Result<FrameInput, DatasetError>>>()
+            .into_iter()
+            .collect()
+    }
+
+    /// Every frame, read in parallel.
+    pub fn read_all(&self) -> Result<Vec<FrameInput>, DatasetError> {
+        self.read_range(0..self.len)
     }
 }

@@ -39,3 +39,27 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
         notes: Vec::new(),
     }
 }
+
+/// The first `n_frames` frames of `gen` as an opened sequence: ground truth now, frames rendered
+/// when the reader reads them (the same frames, bit for bit, as [`from_synth`]).
+pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::FrameReader) {
+    let camera = gen.camera();
+    let stamps = (0..n_frames).map(|i| gen.timestamp(i)).collect();
+    let poses = (0..n_frames).map(|i| gen.pose(i)).collect();
+    let format = match camera.sensor {
+        SensorKind::Rgbd => Format::TumRgbd,
+        SensorKind::Stereo => Format::EurocStereo,
+    };
+    let seq = Sequence {
+        name: format!("synthetic-seed{}", gen.seed()),
+        camera,
+        frames: Vec::new(),
+        groundtruth: Some(ate_eval::Trajectory { stamps, poses }),
+        t_bs: None,
+        format,
+        notes: Vec::new(),
+    };
+    let gen = gen.clone();
+    let frames = crate::FrameReader::new(n_frames, move |i| Ok(gen.frame(i).into_input()));
+    (seq, frames)
+}

@@ -5,8 +5,7 @@
 
 use crate::cameras::CameraId;
 use crate::decode::{read_depth, read_gray};
-use crate::{DatasetError, Format, Sequence};
-use rayon::prelude::*;
+use crate::{DatasetError, Format, FrameReader, Sequence};
 use slam_core::{Camera, FrameInput};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -188,6 +187,17 @@ pub(crate) fn folder_name(dir: &Path) -> String {
 
 /// Loads a TUM RGB-D folder with explicit options.
 pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetError> {
+    let (mut seq, frames) = open_tum_with(dir, opts)?;
+    seq.frames = frames.read_all()?;
+    Ok(seq)
+}
+
+/// Opens a TUM RGB-D folder: lists, association and ground truth are read now, the images when
+/// the returned reader reads them (the sequence's `frames` stay empty).
+pub fn open_tum_with(
+    dir: &Path,
+    opts: &TumOptions,
+) -> Result<(Sequence, FrameReader), DatasetError> {
     if !dir.is_dir() {
         return Err(DatasetError::Missing {
             path: dir.to_path_buf(),
@@ -235,33 +245,30 @@ pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetE
     }
 
     let (w, h) = (camera.width as usize, camera.height as usize);
-    let frames = pairs
-        .par_iter()
-        .map(|(rgb, depth)| -> Result<FrameInput, DatasetError> {
-            let rgb_path = dir.join(&rgb.file);
-            let depth_path = dir.join(&depth.file);
-            let image = read_gray(&rgb_path)?;
-            check_size(&rgb_path, image.width, image.height, w, h, "the camera")?;
-            let d = read_depth(&depth_path, depth_factor)?;
-            check_size(
-                &depth_path,
-                d.width,
-                d.height,
-                image.width,
-                image.height,
-                "its rgb image",
-            )?;
-            Ok(FrameInput {
-                timestamp: rgb.stamp,
-                image: Arc::new(image),
-                depth: Some(Arc::new(d)),
-                right: None,
-            })
+    let folder = dir.to_path_buf();
+    let n_pairs = pairs.len();
+    let frames = FrameReader::new(n_pairs, move |i| {
+        let (rgb, depth) = &pairs[i];
+        let rgb_path = folder.join(&rgb.file);
+        let depth_path = folder.join(&depth.file);
+        let image = read_gray(&rgb_path)?;
+        check_size(&rgb_path, image.width, image.height, w, h, "the camera")?;
+        let d = read_depth(&depth_path, depth_factor)?;
+        check_size(
+            &depth_path,
+            d.width,
+            d.height,
+            image.width,
+            image.height,
+            "its rgb image",
+        )?;
+        Ok(FrameInput {
+            timestamp: rgb.stamp,
+            image: Arc::new(image),
+            depth: Some(Arc::new(d)),
+            right: None,
         })
-        .collect::<Vec<Result<FrameInput, DatasetError>>>()
-        // First error in frame order, whatever thread hit it first.
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()?;
+    });
 
     let gt_path = dir.join("groundtruth.txt");
     let mut notes = Vec::new();
@@ -274,15 +281,16 @@ pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetE
     } else {
         None
     };
-    Ok(Sequence {
+    let seq = Sequence {
         name,
         camera,
-        frames,
+        frames: Vec::new(),
         groundtruth,
         t_bs: None,
         format: Format::TumRgbd,
         notes,
-    })
+    };
+    Ok((seq, frames))
 }
 
 /// Reads a ground-truth file as evaluate_ate.py does (repeated stamps: the last line wins; out

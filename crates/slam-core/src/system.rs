@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::camera::Camera;
 use crate::data::{Features, KeyFrameId, Map, MapPointId, ScaleLevels, TrackedFrame};
 use crate::feature::{OrbConfig, OrbExtractor};
-use crate::frame::Frame;
+use crate::frame::extract_features;
 use crate::image::FrameInput;
 use crate::module::global_ba::{apply_global_ba, global_bundle_adjustment, GlobalBaResult};
 use crate::module::keyframe_decision::{need_new_keyframe, KeyFrameDecisionInput, KeyFrameParams};
@@ -388,24 +388,30 @@ impl System {
             .collect()
     }
 
-    /// Processes one frame.
+    /// Processes one frame: extracts its features, then [`System::track_features`].
     pub fn track(&mut self, input: &FrameInput) -> TrackResult {
+        let t0 = Instant::now();
+        let features = Arc::new(extract_features(input, &self.camera, &mut self.extractor));
+        let time_features_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.track_features(input.timestamp, features, time_features_ms)
+    }
+
+    /// Processes one frame whose features were extracted beforehand ([`extract_features`]
+    /// with this system's camera and `config().orb`), e.g. once for all runs of a
+    /// sweep; `time_features_ms` is what that extraction took, for the frame's statistics.
+    /// Gives the same result, bit for bit, as [`System::track`] on the frame's images.
+    pub fn track_features(
+        &mut self,
+        timestamp: f64,
+        features: Arc<Features>,
+        time_features_ms: f64,
+    ) -> TrackResult {
         let id = self.frame_count;
         self.frame_count += 1;
-        let t0 = Instant::now();
-        let frame = Frame::new(id, input, &self.camera, &mut self.extractor);
-        let features = Arc::new(Features::new(
-            frame.keypoints,
-            frame.descriptors,
-            frame.depth,
-            frame.u_right,
-            &self.camera,
-        ));
-        let mut cur = TrackedFrame::new(id, input.timestamp, features);
-        let time_features_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let mut cur = TrackedFrame::new(id, timestamp, features);
         let t1 = Instant::now();
         let mut stats = FrameStats {
-            timestamp: input.timestamp,
+            timestamp,
             state: self.state,
             n_keypoints: cur.len(),
             n_matches: 0,

@@ -11,14 +11,18 @@ pub const GRID_COLS: usize = 64;
 /// Grid rows (ORB-SLAM2: FRAME_GRID_ROWS).
 pub const GRID_ROWS: usize = 48;
 
-/// Keypoint indices bucketed by image cell.
+/// Keypoint indices bucketed by image cell, stored compactly (one index array and the start of
+/// each cell in it: 16 KB for 1000 keypoints, where a vector per cell took 90 KB), because every
+/// keyframe keeps its grid and a sweep keeps every frame's.
 #[derive(Clone, Debug)]
 pub struct FeatureGrid {
     min_x: f64,
     min_y: f64,
     inv_cell_w: f64,
     inv_cell_h: f64,
-    cells: Vec<Vec<u32>>,
+    /// Keypoints of cell `c` are `indices[cell_start[c]..cell_start[c + 1]]`, ascending.
+    cell_start: Vec<u32>,
+    indices: Vec<u32>,
 }
 
 impl FeatureGrid {
@@ -28,20 +32,47 @@ impl FeatureGrid {
         let (min_x, max_x, min_y, max_y) = undistorted_bounds(camera);
         let inv_cell_w = GRID_COLS as f64 / (max_x - min_x).max(1.0);
         let inv_cell_h = GRID_ROWS as f64 / (max_y - min_y).max(1.0);
-        let mut cells = vec![Vec::new(); GRID_COLS * GRID_ROWS];
         let mut grid = FeatureGrid {
             min_x,
             min_y,
             inv_cell_w,
             inv_cell_h,
-            cells: Vec::new(),
+            cell_start: Vec::new(),
+            indices: Vec::new(),
         };
-        for (i, kp) in keypoints.iter().enumerate() {
-            let (cx, cy) = grid.cell_of(kp.x as f64, kp.y as f64);
-            cells[cy * GRID_COLS + cx].push(i as u32);
+        let cell: Vec<usize> = keypoints
+            .iter()
+            .map(|kp| {
+                let (cx, cy) = grid.cell_of(kp.x as f64, kp.y as f64);
+                cy * GRID_COLS + cx
+            })
+            .collect();
+        let mut start = vec![0u32; GRID_COLS * GRID_ROWS + 1];
+        for &c in &cell {
+            start[c + 1] += 1;
         }
-        grid.cells = cells;
+        for c in 0..GRID_COLS * GRID_ROWS {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut indices = vec![0u32; keypoints.len()];
+        for (i, &c) in cell.iter().enumerate() {
+            indices[fill[c] as usize] = i as u32;
+            fill[c] += 1;
+        }
+        grid.cell_start = start;
+        grid.indices = indices;
         grid
+    }
+
+    /// Keypoints in cell `c` (row-major), ascending.
+    fn cell(&self, c: usize) -> &[u32] {
+        &self.indices[self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
+    }
+
+    /// Heap bytes held by the grid.
+    pub fn heap_bytes(&self) -> usize {
+        4 * (self.cell_start.capacity() + self.indices.capacity())
     }
 
     fn cell_coord(&self, x: f64, y: f64) -> (i64, i64) {
@@ -123,6 +154,14 @@ impl Features {
         self.keypoints.len()
     }
 
+    /// Heap bytes held by the feature set (what a sweep keeps per frame).
+    pub fn heap_bytes(&self) -> usize {
+        self.keypoints.capacity() * std::mem::size_of::<KeyPoint>()
+            + self.descriptors.capacity() * std::mem::size_of::<Descriptor>()
+            + 4 * (self.depth.capacity() + self.u_right.capacity())
+            + self.grid.heap_bytes()
+    }
+
     /// Whether there are no keypoints.
     pub fn is_empty(&self) -> bool {
         self.keypoints.is_empty()
@@ -175,7 +214,7 @@ impl Features {
         let mut out = Vec::new();
         for cy in y0..=y1 {
             for cx in x0..=x1 {
-                for &i in &g.cells[cy * GRID_COLS + cx] {
+                for &i in g.cell(cy * GRID_COLS + cx) {
                     let kp = &self.keypoints[i as usize];
                     if check_levels {
                         let o = kp.octave as i32;

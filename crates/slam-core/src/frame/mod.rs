@@ -14,6 +14,7 @@ pub use grid::{CellGrid, ImageBounds, FRAME_GRID_COLS, FRAME_GRID_ROWS};
 pub use stereo::{compute_stereo_matches, StereoInput, StereoParams};
 
 use crate::camera::{Camera, SensorKind};
+use crate::data::Features;
 use crate::feature::{Descriptor, KeyPoint, OrbExtractor, ScaleInfo};
 use crate::image::{DepthImage, FrameInput};
 
@@ -41,6 +42,25 @@ pub struct Frame {
     pub scale: Arc<ScaleInfo>,
     bounds: ImageBounds,
     grid: CellGrid,
+}
+
+/// The features tracking works on, extracted from one frame's images: the first step of
+/// [`crate::system::System::track`]. They depend only on the images, the camera and the ORB
+/// settings (not on the configuration of MC-OR or AVC, the seed or the mapping lag), so a sweep
+/// extracts them once per frame and shares them read-only between its runs.
+pub fn extract_features(
+    input: &FrameInput,
+    camera: &Camera,
+    extractor: &mut OrbExtractor,
+) -> Features {
+    let frame = Frame::new(0, input, camera, extractor);
+    Features::new(
+        frame.keypoints,
+        frame.descriptors,
+        frame.depth,
+        frame.u_right,
+        camera,
+    )
 }
 
 impl Frame {
