@@ -12,6 +12,9 @@
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, Matrix6x3, Vector3};
 
 use super::envelope::EnvelopeMatrix;
+use super::fixed_mul::{
+    left_jacobian_transpose_mul, mul, mul_left_jacobian, mul_transpose, transpose_mul,
+};
 use super::lm::{levenberg_marquardt, LmProblem};
 use super::ordering::{inverse_permutation, Adjacency};
 use super::residual::{linearize_observation, observation_chi2, Measurement};
@@ -233,6 +236,8 @@ struct BaSolver<'a> {
     /// `point_obs[point_start[j]..point_start[j + 1]]`.
     point_start: Vec<usize>,
     point_obs: Vec<usize>,
+    /// Per entry of `point_obs`: the variable index of its keyframe, `None` if fixed.
+    obs_var: Vec<Option<usize>>,
     poses: Vec<Isometry3<f64>>,
     points: Vec<Vector3<f64>>,
     trial_poses: Vec<Isometry3<f64>>,
@@ -247,6 +252,13 @@ struct BaSolver<'a> {
     gp: Vec<Vector3<f64>>,
     /// Camera-point blocks `W` per entry of `point_obs` (zero for fixed keyframes).
     w: Vec<Matrix6x3<f64>>,
+    /// Work space of [`LmProblem::solve`], kept across calls so that an iteration allocates
+    /// nothing: the dense reduced camera system, `V_j^-1`, the point damping and one point's
+    /// observations by free keyframes (variable, entry of `point_obs`).
+    dense: DMatrix<f64>,
+    v_inv: Vec<Matrix3<f64>>,
+    damping: Vec<f64>,
+    free: Vec<(usize, usize)>,
 }
 
 impl<'a> BaSolver<'a> {
@@ -282,6 +294,7 @@ impl<'a> BaSolver<'a> {
             robust: false,
             point_start: vec![0; points.len() + 1],
             point_obs: Vec::new(),
+            obs_var: Vec::new(),
             trial_poses: poses.clone(),
             trial_points: points.clone(),
             poses,
@@ -292,6 +305,10 @@ impl<'a> BaSolver<'a> {
             v: vec![Matrix3::zeros(); points.len()],
             gp: vec![Vector3::zeros(); points.len()],
             w: Vec::new(),
+            dense: DMatrix::zeros(0, 0),
+            v_inv: vec![Matrix3::zeros(); points.len()],
+            damping: vec![0.0; points.len()],
+            free: Vec::new(),
             points,
         }
     }
@@ -317,6 +334,11 @@ impl<'a> BaSolver<'a> {
                 fill[o.point] += 1;
             }
         }
+        self.obs_var = self
+            .point_obs
+            .iter()
+            .map(|&i| self.kf_var[self.obs[i].keyframe])
+            .collect();
         self.w = vec![Matrix6x3::zeros(); self.point_obs.len()];
         self.cost = self
             .cost_at(&self.poses, &self.points)
@@ -376,16 +398,15 @@ impl LmProblem for BaSolver<'_> {
                     self.w[k] = Matrix6x3::zeros();
                     continue;
                 };
-                let rt = pose.r.transpose();
-                let m_r = lin.jtj * pose.r;
-                v += rt * m_r;
-                gp -= rt * lin.jtr;
+                let m_r = mul(&lin.jtj, &pose.r);
+                v += transpose_mul(&pose.r, &m_r);
+                gp -= transpose_mul(&pose.r, &lin.jtr);
                 if let Some(var) = self.kf_var[o.keyframe] {
                     let a = d_point_d_left_perturbation(&p_c);
-                    let at: Matrix6x3<f64> = a.transpose();
-                    self.u[var] += at * (lin.jtj * a);
-                    self.gc[var] -= at * lin.jtr;
-                    self.w[k] = at * m_r;
+                    self.u[var] +=
+                        left_jacobian_transpose_mul(&a, &mul_left_jacobian(&lin.jtj, &a));
+                    self.gc[var] -= left_jacobian_transpose_mul(&a, &lin.jtr);
+                    self.w[k] = left_jacobian_transpose_mul(&a, &m_r);
                 } else {
                     self.w[k] = Matrix6x3::zeros();
                 }
@@ -410,7 +431,15 @@ impl LmProblem for BaSolver<'_> {
         let n = self.n_var;
         let n_points = self.points.len();
         let mut s = match &self.first_block {
-            None => CameraSystem::Dense(DMatrix::<f64>::zeros(6 * n, 6 * n)),
+            None => {
+                let mut dense = std::mem::replace(&mut self.dense, DMatrix::zeros(0, 0));
+                if dense.nrows() == 6 * n {
+                    dense.fill(0.0);
+                } else {
+                    dense = DMatrix::zeros(6 * n, 6 * n);
+                }
+                CameraSystem::Dense(dense)
+            }
             Some(first) => CameraSystem::Envelope(EnvelopeMatrix::zeros(
                 (0..6 * n).map(|row| 6 * first[row / 6]).collect(),
             )),
@@ -422,9 +451,6 @@ impl LmProblem for BaSolver<'_> {
             rhs.fixed_rows_mut::<6>(6 * i).copy_from(&self.gc[i]);
         }
         // Eliminate every point: S -= W V^-1 W^T, rhs -= W V^-1 g_p.
-        let mut v_inv = vec![Matrix3::zeros(); n_points];
-        let mut damping = vec![0.0; n_points];
-        let mut y = vec![Matrix6x3::zeros(); self.point_obs.len()];
         for j in 0..n_points {
             let range = self.point_start[j]..self.point_start[j + 1];
             if range.is_empty() {
@@ -432,25 +458,22 @@ impl LmProblem for BaSolver<'_> {
             }
             let vj = &self.v[j];
             let max_diag = vj[(0, 0)].max(vj[(1, 1)]).max(vj[(2, 2)]);
-            damping[j] = lambda + POINT_DAMPING * max_diag + POINT_DAMPING_MIN;
-            let inv = (vj + Matrix3::identity() * damping[j])
+            self.damping[j] = lambda + POINT_DAMPING * max_diag + POINT_DAMPING_MIN;
+            let inv = (vj + Matrix3::identity() * self.damping[j])
                 .cholesky()?
                 .inverse();
-            v_inv[j] = inv;
-            for a in range.clone() {
-                let Some(ia) = self.kf_var[self.obs[self.point_obs[a]].keyframe] else {
-                    continue;
-                };
-                y[a] = self.w[a] * inv;
-                let r = y[a] * self.gp[j];
+            self.v_inv[j] = inv;
+            // The point's observations by free keyframes: (variable, entry of point_obs).
+            self.free.clear();
+            self.free
+                .extend(range.filter_map(|k| Some((self.obs_var[k]?, k))));
+            for (n_a, &(ia, a)) in self.free.iter().enumerate() {
+                let y_a = mul(&self.w[a], &inv);
+                let r = mul(&y_a, &self.gp[j]);
                 let mut seg = rhs.fixed_rows_mut::<6>(6 * ia);
                 seg -= r;
-                for b in a..range.end {
-                    let Some(ib) = self.kf_var[self.obs[self.point_obs[b]].keyframe] else {
-                        continue;
-                    };
-                    let blk: Matrix6<f64> = y[a] * self.w[b].transpose();
-                    s.subtract_pair(ia, ib, a == b, &blk);
+                for &(ib, b) in &self.free[n_a..] {
+                    s.subtract_pair(ia, ib, a == b, &y_a, &self.w[b]);
                 }
             }
         }
@@ -459,6 +482,9 @@ impl LmProblem for BaSolver<'_> {
         } else {
             DVector::zeros(0)
         };
+        if let CameraSystem::Dense(factor) = s {
+            self.dense = factor;
+        }
         if !dc.iter().all(|x| x.is_finite()) {
             return None;
         }
@@ -481,15 +507,16 @@ impl LmProblem for BaSolver<'_> {
             }
             let mut r = self.gp[j];
             for k in range {
-                if let Some(var) = self.kf_var[self.obs[self.point_obs[k]].keyframe] {
-                    r -= self.w[k].transpose() * dc.fixed_rows::<6>(6 * var);
+                if let Some(var) = self.obs_var[k] {
+                    let d: Vector6 = dc.fixed_rows::<6>(6 * var).into_owned();
+                    r -= transpose_mul(&self.w[k], &d);
                 }
             }
-            let dp = v_inv[j] * r;
+            let dp = mul(&self.v_inv[j], &r);
             if !dp.iter().all(|x| x.is_finite()) {
                 return None;
             }
-            predicted += dp.dot(&(dp * damping[j] + self.gp[j]));
+            predicted += dp.dot(&(dp * self.damping[j] + self.gp[j]));
             self.trial_points[j] = self.points[j] + dp;
         }
         Some(predicted)
@@ -550,34 +577,30 @@ impl CameraSystem {
         }
     }
 
-    /// Subtracts one point's contribution `blk = Y_a W_b^T` coupling keyframes `ia` and `ib`
-    /// (and, unless it is the same observation, its transpose).
-    fn subtract_pair(&mut self, ia: usize, ib: usize, same: bool, blk: &Matrix6<f64>) {
+    /// Subtracts one point's contribution `Y_a W_b^T` coupling keyframes `ia` and `ib` (and,
+    /// unless it is the same observation, its transpose). Only the lower triangle is kept: the
+    /// Cholesky factorizations read nothing else.
+    #[inline(always)]
+    fn subtract_pair(
+        &mut self,
+        ia: usize,
+        ib: usize,
+        same: bool,
+        y_a: &Matrix6x3<f64>,
+        w_b: &Matrix6x3<f64>,
+    ) {
         match self {
-            CameraSystem::Dense(s) => {
-                if ia == ib {
-                    let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ia);
-                    if same {
-                        view -= blk;
-                    } else {
-                        view -= blk + blk.transpose();
-                    }
-                } else {
-                    let mut view = s.fixed_view_mut::<6, 6>(6 * ia, 6 * ib);
-                    view -= blk;
-                    let mut view = s.fixed_view_mut::<6, 6>(6 * ib, 6 * ia);
-                    view -= blk.transpose();
-                }
-            }
+            CameraSystem::Dense(s) => subtract_pair_dense(s, ia, ib, same, y_a, w_b),
             CameraSystem::Envelope(s) => {
+                let blk: Matrix6<f64> = mul_transpose(y_a, w_b);
                 if ia == ib {
                     if same {
-                        s.sub_block6(ia, ia, blk);
+                        s.sub_block6(ia, ia, &blk);
                     } else {
                         s.sub_block6(ia, ia, &(blk + blk.transpose()));
                     }
                 } else if ia > ib {
-                    s.sub_block6(ia, ib, blk);
+                    s.sub_block6(ia, ib, &blk);
                 } else {
                     s.sub_block6(ib, ia, &blk.transpose());
                 }
@@ -586,10 +609,16 @@ impl CameraSystem {
     }
 
     /// The camera step, `None` when `S` is not positive definite.
-    fn solve(self, rhs: DVector<f64>) -> Option<DVector<f64>> {
+    /// The dense matrix is factorized in place (its storage is kept for the next solve).
+    fn solve(&mut self, rhs: DVector<f64>) -> Option<DVector<f64>> {
         match self {
-            CameraSystem::Dense(s) => Some(s.cholesky()?.solve(&rhs)),
-            CameraSystem::Envelope(mut s) => {
+            CameraSystem::Dense(s) => {
+                let chol = std::mem::replace(s, DMatrix::zeros(0, 0)).cholesky()?;
+                let x = chol.solve(&rhs);
+                *s = chol.unpack_dirty();
+                Some(x)
+            }
+            CameraSystem::Envelope(s) => {
                 if !s.cholesky() {
                     return None;
                 }
@@ -598,6 +627,59 @@ impl CameraSystem {
                 Some(x)
             }
         }
+    }
+}
+
+/// [`CameraSystem::subtract_pair`] on the dense column-major matrix: the lower-triangle entries
+/// of `Y_a W_b^T` (block `(ia, ib)`) or of its transpose (block `(ib, ia)`), each entry
+/// `sum_k Y_a[r, k] W_b[c, k]` accumulated in nalgebra's order so the result is the product's.
+#[inline(always)]
+fn subtract_pair_dense(
+    s: &mut DMatrix<f64>,
+    ia: usize,
+    ib: usize,
+    same: bool,
+    y_a: &Matrix6x3<f64>,
+    w_b: &Matrix6x3<f64>,
+) {
+    let dim = s.nrows();
+    let data = s.as_mut_slice();
+    if ia == ib {
+        let blk: Matrix6<f64> = mul_transpose(y_a, w_b);
+        for c in 0..6 {
+            let col = &mut data[(6 * ia + c) * dim + 6 * ia..][..6];
+            for r in c..6 {
+                col[r] -= if same {
+                    blk[(r, c)]
+                } else {
+                    blk[(r, c)] + blk[(c, r)]
+                };
+            }
+        }
+    } else if ia > ib {
+        // Column 6 ib + c of S, rows 6 ia + r: entry (r, c) of the block.
+        for c in 0..6 {
+            let col = &mut data[(6 * ib + c) * dim + 6 * ia..][..6];
+            subtract_combination(col, y_a, [w_b[(c, 0)], w_b[(c, 1)], w_b[(c, 2)]]);
+        }
+    } else {
+        // Column 6 ia + r of S, rows 6 ib + c: entry (r, c) of the block, transposed.
+        for r in 0..6 {
+            let col = &mut data[(6 * ia + r) * dim + 6 * ib..][..6];
+            subtract_combination(col, w_b, [y_a[(r, 0)], y_a[(r, 1)], y_a[(r, 2)]]);
+        }
+    }
+}
+
+/// `col -= m s`: six entries, each `(m[i, 0] s[0] + m[i, 1] s[1]) + m[i, 2] s[2]` (the
+/// order of nalgebra's product), in a form the compiler turns into vector instructions.
+#[inline(always)]
+fn subtract_combination(col: &mut [f64], m: &Matrix6x3<f64>, s: [f64; 3]) {
+    let col: &mut [f64; 6] = col.try_into().expect("six rows");
+    let m = m.as_slice();
+    let (m0, m1, m2) = (&m[0..6], &m[6..12], &m[12..18]);
+    for i in 0..6 {
+        col[i] -= m0[i] * s[0] + m1[i] * s[1] + m2[i] * s[2];
     }
 }
 

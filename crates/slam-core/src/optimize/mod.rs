@@ -9,6 +9,7 @@
 //! through [`CameraResidual`] without touching the solvers.
 
 mod envelope;
+mod fixed_mul;
 mod lm;
 mod local_ba;
 #[cfg(test)]

@@ -13,6 +13,7 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix3, Matrix4x3, Vector3, Vector4};
 
+use super::fixed_mul::transpose_mul;
 use crate::Camera;
 
 /// Largest residual dimension the solvers support (the AVC residual is 4-D).
@@ -188,8 +189,8 @@ pub(crate) fn linearize_observation(
     let w = inv_sigma2 * robust_weight(chi2);
     let j = &block.d_residual_d_point;
     Some(PointLinearization {
-        jtj: j.transpose() * j * w,
-        jtr: j.transpose() * block.residual * w,
+        jtj: transpose_mul(j, j) * w,
+        jtr: transpose_mul(j, &block.residual) * w,
     })
 }
 

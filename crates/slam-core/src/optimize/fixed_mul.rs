@@ -1,0 +1,221 @@
+//! Products of small fixed-size matrices written out so that the compiler inlines and unrolls
+//! them. nalgebra's generic product is the same arithmetic behind a call the optimiser keeps out
+//! of line; in the inner loops of bundle adjustment (one 6 x 3 by 3 x 6 product per pair of
+//! observations of a point) that call costs more than the arithmetic.
+//!
+//! Every entry is computed with the operations of nalgebra's product in the same order
+//! (`((a_i0 b_0j + a_i1 b_1j) + a_i2 b_2j) + ...`, no fused multiply-add), so the results are the
+//! same bits: swapping these in for nalgebra's operator leaves every trajectory unchanged.
+
+use nalgebra::{Matrix3, Matrix3x6, SMatrix};
+
+/// `a * b`, bit for bit as nalgebra computes it.
+#[inline(always)]
+pub(crate) fn mul<const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<f64, R, K>,
+    b: &SMatrix<f64, K, C>,
+) -> SMatrix<f64, R, C> {
+    let mut out = SMatrix::<f64, R, C>::zeros();
+    for j in 0..C {
+        for i in 0..R {
+            out[(i, j)] = dot_row_col(a, i, b, j);
+        }
+    }
+    out
+}
+
+/// `a * b^T`, bit for bit as nalgebra computes `a * b.transpose()`.
+#[inline(always)]
+pub(crate) fn mul_transpose<const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<f64, R, K>,
+    b: &SMatrix<f64, C, K>,
+) -> SMatrix<f64, R, C> {
+    let mut out = SMatrix::<f64, R, C>::zeros();
+    for j in 0..C {
+        for i in 0..R {
+            let mut s = a[(i, 0)] * b[(j, 0)];
+            for k in 1..K {
+                s += a[(i, k)] * b[(j, k)];
+            }
+            out[(i, j)] = s;
+        }
+    }
+    out
+}
+
+/// `a^T * b`, bit for bit as nalgebra computes `a.transpose() * b`.
+#[inline(always)]
+pub(crate) fn transpose_mul<const K: usize, const R: usize, const C: usize>(
+    a: &SMatrix<f64, K, R>,
+    b: &SMatrix<f64, K, C>,
+) -> SMatrix<f64, R, C> {
+    let mut out = SMatrix::<f64, R, C>::zeros();
+    for j in 0..C {
+        for i in 0..R {
+            let mut s = a[(0, i)] * b[(0, j)];
+            for k in 1..K {
+                s += a[(k, i)] * b[(k, j)];
+            }
+            out[(i, j)] = s;
+        }
+    }
+    out
+}
+
+/// `a^T b` for the Jacobian `a = [-[p]x | I]` of a camera-frame point by a left pose perturbation
+/// ([`crate::geometry::d_point_d_left_perturbation`]): nalgebra's `a.transpose() * b` without
+/// the terms that are products with `a`'s structural zeros and ones. The values are those of
+/// the full product (adding a zero or multiplying by one is exact) up to the sign of a result
+/// that is exactly zero.
+#[inline(always)]
+pub(crate) fn left_jacobian_transpose_mul<const C: usize>(
+    a: &Matrix3x6<f64>,
+    b: &SMatrix<f64, 3, C>,
+) -> SMatrix<f64, 6, C> {
+    debug_assert!(is_left_jacobian(a));
+    let mut out = SMatrix::<f64, 6, C>::zeros();
+    for j in 0..C {
+        // Rows 0-2: column i of -[p]x has its zero on the diagonal, row k = i.
+        out[(0, j)] = a[(1, 0)] * b[(1, j)] + a[(2, 0)] * b[(2, j)];
+        out[(1, j)] = a[(0, 1)] * b[(0, j)] + a[(2, 1)] * b[(2, j)];
+        out[(2, j)] = a[(0, 2)] * b[(0, j)] + a[(1, 2)] * b[(1, j)];
+        // Rows 3-5: the identity.
+        out[(3, j)] = b[(0, j)];
+        out[(4, j)] = b[(1, j)];
+        out[(5, j)] = b[(2, j)];
+    }
+    out
+}
+
+/// `m a` for the left-perturbation Jacobian `a = [-[p]x | I]`: nalgebra's `m * a` without the
+/// products with structural zeros and ones (same values up to the sign of an exact zero).
+#[inline(always)]
+pub(crate) fn mul_left_jacobian(m: &Matrix3<f64>, a: &Matrix3x6<f64>) -> Matrix3x6<f64> {
+    debug_assert!(is_left_jacobian(a));
+    let mut out = Matrix3x6::zeros();
+    for i in 0..3 {
+        out[(i, 0)] = m[(i, 1)] * a[(1, 0)] + m[(i, 2)] * a[(2, 0)];
+        out[(i, 1)] = m[(i, 0)] * a[(0, 1)] + m[(i, 2)] * a[(2, 1)];
+        out[(i, 2)] = m[(i, 0)] * a[(0, 2)] + m[(i, 1)] * a[(1, 2)];
+        out[(i, 3)] = m[(i, 0)];
+        out[(i, 4)] = m[(i, 1)];
+        out[(i, 5)] = m[(i, 2)];
+    }
+    out
+}
+
+/// Whether `a` has the structure `[S | I]` with a zero diagonal in `S`.
+fn is_left_jacobian(a: &Matrix3x6<f64>) -> bool {
+    (0..3).all(|i| a[(i, i)] == 0.0 && (0..3).all(|k| a[(i, 3 + k)] == f64::from(i == k)))
+}
+
+/// Row `i` of `a` times column `j` of `b`, accumulated from the first term on.
+#[inline(always)]
+fn dot_row_col<const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<f64, R, K>,
+    i: usize,
+    b: &SMatrix<f64, K, C>,
+    j: usize,
+) -> f64 {
+    let mut s = a[(i, 0)] * b[(0, j)];
+    for k in 1..K {
+        s += a[(i, k)] * b[(k, j)];
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::d_point_d_left_perturbation;
+    use nalgebra::{Matrix4x3, Matrix6, Matrix6x3, Vector3, Vector4, Vector6};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Entries over many magnitudes and both signs, with exact zeros, negative zeros and ones
+    /// (as in the structured Jacobians), so rounding and signed zeros are exercised.
+    fn random<const R: usize, const C: usize>(rng: &mut ChaCha8Rng) -> SMatrix<f64, R, C> {
+        SMatrix::from_fn(|_, _| match rng.random_range(0..10) {
+            0 => 0.0,
+            1 => -0.0,
+            2 => 1.0,
+            _ => {
+                let m: f64 = rng.random_range(-1.0..1.0);
+                m * 10f64.powi(rng.random_range(-8..8))
+            }
+        })
+    }
+
+    fn same_bits<const R: usize, const C: usize>(
+        a: &SMatrix<f64, R, C>,
+        b: &SMatrix<f64, R, C>,
+    ) -> bool {
+        a.iter()
+            .zip(b.iter())
+            .all(|(x, y)| x.to_bits() == y.to_bits())
+    }
+
+    #[test]
+    fn products_are_nalgebra_s_bit_for_bit() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..2000 {
+            let a6x3: Matrix6x3<f64> = random(&mut rng);
+            let b6x3: Matrix6x3<f64> = random(&mut rng);
+            let m3: Matrix3<f64> = random(&mut rng);
+            let n3: Matrix3<f64> = random(&mut rng);
+            let a3x6: Matrix3x6<f64> = random(&mut rng);
+            let j4x3: Matrix4x3<f64> = random(&mut rng);
+            let r4: Vector4<f64> = random(&mut rng);
+            let v3: Vector3<f64> = random(&mut rng);
+            let v6: Vector6<f64> = random(&mut rng);
+            let y: Matrix6<f64> = mul_transpose(&a6x3, &b6x3);
+            assert!(same_bits(&y, &(a6x3 * b6x3.transpose())));
+            assert!(same_bits(&mul(&a6x3, &m3), &(a6x3 * m3)));
+            assert!(same_bits(&mul(&m3, &n3), &(m3 * n3)));
+            assert!(same_bits(&mul(&a6x3, &v3), &(a6x3 * v3)));
+            assert!(same_bits(&mul(&m3, &a3x6), &(m3 * a3x6)));
+            assert!(same_bits(
+                &mul(&a3x6.transpose(), &a3x6),
+                &(a3x6.transpose() * a3x6)
+            ));
+            assert!(same_bits(&transpose_mul(&m3, &n3), &(m3.transpose() * n3)));
+            assert!(same_bits(&transpose_mul(&m3, &v3), &(m3.transpose() * v3)));
+            assert!(same_bits(
+                &transpose_mul(&j4x3, &j4x3),
+                &(j4x3.transpose() * j4x3)
+            ));
+            assert!(same_bits(
+                &transpose_mul(&j4x3, &r4),
+                &(j4x3.transpose() * r4)
+            ));
+            assert!(same_bits(
+                &transpose_mul(&a6x3, &v6),
+                &(a6x3.transpose() * v6)
+            ));
+        }
+    }
+
+    #[test]
+    fn structured_products_equal_the_full_products() {
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        for _ in 0..2000 {
+            let p: Vector3<f64> = random(&mut rng);
+            let a = d_point_d_left_perturbation(&p);
+            let m: Matrix3<f64> = random(&mut rng);
+            let v: Vector3<f64> = random(&mut rng);
+            // `==` on f64: equal values, a zero of either sign equal to the other.
+            assert_eq!(mul_left_jacobian(&m, &a), m * a);
+            assert_eq!(left_jacobian_transpose_mul(&a, &m), a.transpose() * m);
+            assert_eq!(left_jacobian_transpose_mul(&a, &v), a.transpose() * v);
+            let ma = m * a;
+            assert_eq!(left_jacobian_transpose_mul(&a, &ma), a.transpose() * ma);
+            // Away from exact zeros, the same bits.
+            let dense: Matrix3<f64> = Matrix3::from_fn(|_, _| rng.random_range(0.5..2.0));
+            let full = a.transpose() * (dense * a);
+            let structured = left_jacobian_transpose_mul(&a, &mul_left_jacobian(&dense, &a));
+            if structured.iter().all(|x| *x != 0.0) {
+                assert!(same_bits(&structured, &full));
+            }
+        }
+    }
+}
