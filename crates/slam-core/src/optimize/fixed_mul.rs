@@ -7,7 +7,7 @@
 //! (`((a_i0 b_0j + a_i1 b_1j) + a_i2 b_2j) + ...`, no fused multiply-add), so the results are the
 //! same bits: swapping these in for nalgebra's operator leaves every trajectory unchanged.
 
-use nalgebra::{Matrix3, Matrix3x6, SMatrix};
+use nalgebra::{Matrix3, Matrix3x6, SMatrix, Vector3};
 
 /// `a * b`, bit for bit as nalgebra computes it.
 #[inline(always)]
@@ -62,23 +62,23 @@ pub(crate) fn transpose_mul<const K: usize, const R: usize, const C: usize>(
     out
 }
 
-/// `a^T b` for the Jacobian `a = [-[p]x | I]` of a camera-frame point by a left pose perturbation
-/// ([`crate::geometry::d_point_d_left_perturbation`]): nalgebra's `a.transpose() * b` without
-/// the terms that are products with `a`'s structural zeros and ones. The values are those of
-/// the full product (adding a zero or multiplying by one is exact) up to the sign of a result
-/// that is exactly zero.
+/// `A^T b` for the Jacobian `A = [-[p]x | I]` of the camera-frame point `p` by a left pose
+/// perturbation ([`crate::geometry::d_point_d_left_perturbation`]): nalgebra's
+/// `A.transpose() * b` without the products with `A`'s structural zeros and ones. The values
+/// are those of the full product (adding a zero or multiplying by one is exact) up to the sign
+/// of a result that is exactly zero.
 #[inline(always)]
 pub(crate) fn left_jacobian_transpose_mul<const C: usize>(
-    a: &Matrix3x6<f64>,
+    p: &Vector3<f64>,
     b: &SMatrix<f64, 3, C>,
 ) -> SMatrix<f64, 6, C> {
-    debug_assert!(is_left_jacobian(a));
+    let s = skew_entries(p);
     let mut out = SMatrix::<f64, 6, C>::zeros();
     for j in 0..C {
         // Rows 0-2: column i of -[p]x has its zero on the diagonal, row k = i.
-        out[(0, j)] = a[(1, 0)] * b[(1, j)] + a[(2, 0)] * b[(2, j)];
-        out[(1, j)] = a[(0, 1)] * b[(0, j)] + a[(2, 1)] * b[(2, j)];
-        out[(2, j)] = a[(0, 2)] * b[(0, j)] + a[(1, 2)] * b[(1, j)];
+        out[(0, j)] = s[1][0] * b[(1, j)] + s[2][0] * b[(2, j)];
+        out[(1, j)] = s[0][1] * b[(0, j)] + s[2][1] * b[(2, j)];
+        out[(2, j)] = s[0][2] * b[(0, j)] + s[1][2] * b[(1, j)];
         // Rows 3-5: the identity.
         out[(3, j)] = b[(0, j)];
         out[(4, j)] = b[(1, j)];
@@ -87,16 +87,17 @@ pub(crate) fn left_jacobian_transpose_mul<const C: usize>(
     out
 }
 
-/// `m a` for the left-perturbation Jacobian `a = [-[p]x | I]`: nalgebra's `m * a` without the
-/// products with structural zeros and ones (same values up to the sign of an exact zero).
+/// `m A` for the left-perturbation Jacobian `A = [-[p]x | I]` of the point `p`: nalgebra's
+/// `m * A` without the products with structural zeros and ones (same values up to the sign of
+/// an exact zero).
 #[inline(always)]
-pub(crate) fn mul_left_jacobian(m: &Matrix3<f64>, a: &Matrix3x6<f64>) -> Matrix3x6<f64> {
-    debug_assert!(is_left_jacobian(a));
+pub(crate) fn mul_left_jacobian(m: &Matrix3<f64>, p: &Vector3<f64>) -> Matrix3x6<f64> {
+    let s = skew_entries(p);
     let mut out = Matrix3x6::zeros();
     for i in 0..3 {
-        out[(i, 0)] = m[(i, 1)] * a[(1, 0)] + m[(i, 2)] * a[(2, 0)];
-        out[(i, 1)] = m[(i, 0)] * a[(0, 1)] + m[(i, 2)] * a[(2, 1)];
-        out[(i, 2)] = m[(i, 0)] * a[(0, 2)] + m[(i, 1)] * a[(1, 2)];
+        out[(i, 0)] = m[(i, 1)] * s[1][0] + m[(i, 2)] * s[2][0];
+        out[(i, 1)] = m[(i, 0)] * s[0][1] + m[(i, 2)] * s[2][1];
+        out[(i, 2)] = m[(i, 0)] * s[0][2] + m[(i, 1)] * s[1][2];
         out[(i, 3)] = m[(i, 0)];
         out[(i, 4)] = m[(i, 1)];
         out[(i, 5)] = m[(i, 2)];
@@ -104,9 +105,11 @@ pub(crate) fn mul_left_jacobian(m: &Matrix3<f64>, a: &Matrix3x6<f64>) -> Matrix3
     out
 }
 
-/// Whether `a` has the structure `[S | I]` with a zero diagonal in `S`.
-fn is_left_jacobian(a: &Matrix3x6<f64>) -> bool {
-    (0..3).all(|i| a[(i, i)] == 0.0 && (0..3).all(|k| a[(i, 3 + k)] == f64::from(i == k)))
+/// The entries `[row][column]` of `-[p]x` as [`crate::geometry::d_point_d_left_perturbation`]
+/// computes them (negation is exact); the diagonal is zero and not read.
+#[inline(always)]
+fn skew_entries(p: &Vector3<f64>) -> [[f64; 3]; 3] {
+    [[0.0, p.z, -p.y], [-p.z, 0.0, p.x], [p.y, -p.x, 0.0]]
 }
 
 /// Row `i` of `a` times column `j` of `b`, accumulated from the first term on.
@@ -128,7 +131,7 @@ fn dot_row_col<const R: usize, const K: usize, const C: usize>(
 mod tests {
     use super::*;
     use crate::geometry::d_point_d_left_perturbation;
-    use nalgebra::{Matrix4x3, Matrix6, Matrix6x3, Vector3, Vector4, Vector6};
+    use nalgebra::{Matrix4x3, Matrix6, Matrix6x3, Vector4, Vector6};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -204,15 +207,15 @@ mod tests {
             let m: Matrix3<f64> = random(&mut rng);
             let v: Vector3<f64> = random(&mut rng);
             // `==` on f64: equal values, a zero of either sign equal to the other.
-            assert_eq!(mul_left_jacobian(&m, &a), m * a);
-            assert_eq!(left_jacobian_transpose_mul(&a, &m), a.transpose() * m);
-            assert_eq!(left_jacobian_transpose_mul(&a, &v), a.transpose() * v);
+            assert_eq!(mul_left_jacobian(&m, &p), m * a);
+            assert_eq!(left_jacobian_transpose_mul(&p, &m), a.transpose() * m);
+            assert_eq!(left_jacobian_transpose_mul(&p, &v), a.transpose() * v);
             let ma = m * a;
-            assert_eq!(left_jacobian_transpose_mul(&a, &ma), a.transpose() * ma);
+            assert_eq!(left_jacobian_transpose_mul(&p, &ma), a.transpose() * ma);
             // Away from exact zeros, the same bits.
             let dense: Matrix3<f64> = Matrix3::from_fn(|_, _| rng.random_range(0.5..2.0));
             let full = a.transpose() * (dense * a);
-            let structured = left_jacobian_transpose_mul(&a, &mul_left_jacobian(&dense, &a));
+            let structured = left_jacobian_transpose_mul(&p, &mul_left_jacobian(&dense, &p));
             if structured.iter().all(|x| *x != 0.0) {
                 assert!(same_bits(&structured, &full));
             }

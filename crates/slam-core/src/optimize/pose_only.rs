@@ -2,12 +2,13 @@
 //! against fixed map points in rounds of Levenberg-Marquardt, re-classifying every observation
 //! as inlier or outlier by its chi2 after each round.
 
-use nalgebra::{Isometry3, Matrix6, Matrix6x3, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix6, Point3, Vector3};
 
+use super::fixed_mul::{left_jacobian_transpose_mul, mul_left_jacobian};
 use super::lm::{levenberg_marquardt, LmProblem};
 use super::residual::{linearize_observation, observation_chi2, Measurement};
 use super::robust::{kernel_cost, kernel_weight};
-use crate::geometry::{d_point_d_left_perturbation, exp_se3, Vector6};
+use crate::geometry::{exp_se3, Vector6};
 use crate::Camera;
 
 /// One keypoint of the frame matched to a map point held fixed.
@@ -226,10 +227,8 @@ impl LmProblem for PoseProblem<'_> {
             else {
                 continue;
             };
-            let a = d_point_d_left_perturbation(&p_c);
-            let at: Matrix6x3<f64> = a.transpose();
-            jtj += at * (lin.jtj * a);
-            jtr += at * lin.jtr;
+            jtj += left_jacobian_transpose_mul(&p_c, &mul_left_jacobian(&lin.jtj, &p_c));
+            jtr += left_jacobian_transpose_mul(&p_c, &lin.jtr);
         }
         self.h = jtj;
         self.g = -jtr;
@@ -266,7 +265,7 @@ pub(crate) fn residual_pose_jacobian(
 ) -> Option<nalgebra::Matrix4x6<f64>> {
     let p_c = (tcw * Point3::from(o.point_world)).coords;
     let block = o.measurement.evaluate(camera, &p_c)?;
-    Some(block.d_residual_d_point * d_point_d_left_perturbation(&p_c))
+    Some(block.d_residual_d_point * crate::geometry::d_point_d_left_perturbation(&p_c))
 }
 
 #[cfg(test)]

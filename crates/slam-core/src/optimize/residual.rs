@@ -116,6 +116,7 @@ impl Measurement {
 
     /// Evaluates the residual and its Jacobian at the camera-frame point `p_c`; `None` when the
     /// point is not in front of the camera (`z <= MIN_DEPTH`) or the custom residual is undefined.
+    #[inline]
     pub fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock> {
         if p_c.z.is_nan() || p_c.z <= MIN_DEPTH {
             return None;
@@ -165,6 +166,7 @@ pub(crate) struct PointLinearization {
 }
 
 /// The observation's raw chi2 at `p_c`, or `None` when the residual is undefined there.
+#[inline]
 pub(crate) fn observation_chi2(
     camera: &Camera,
     measurement: &Measurement,
@@ -177,6 +179,7 @@ pub(crate) fn observation_chi2(
 
 /// Linearizes one observation at `p_c`; `robust_weight` maps the raw chi2 to the IRLS weight
 /// (1 without a kernel).
+#[inline]
 pub(crate) fn linearize_observation(
     camera: &Camera,
     measurement: &Measurement,
