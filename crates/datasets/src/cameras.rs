@@ -3,7 +3,7 @@
 //! that turn their 16-bit depth PNGs into metres.
 
 use serde::{Deserialize, Serialize};
-use slam_core::{Camera, Distortion, SensorKind};
+use slam_core::Camera;
 
 /// Which camera a catalogued sequence uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -78,39 +78,12 @@ pub const DEPTH_FACTOR_FR2_ORBSLAM2: f64 = 5208.0;
 
 /// TUM fr1 (ORB-SLAM2 TUM1.yaml): 640x480, 30 Hz, bf 40, ThDepth 40, radial-tangential distortion.
 pub fn tum_fr1() -> Camera {
-    Camera {
-        fx: 517.306408,
-        fy: 516.469215,
-        cx: 318.643040,
-        cy: 255.313989,
-        distortion: Some(Distortion {
-            k1: 0.262383,
-            k2: -0.953104,
-            p1: -0.005358,
-            p2: 0.002628,
-            k3: 1.163314,
-        }),
-        ..Camera::tum_fr3()
-    }
+    Camera::tum_fr1()
 }
 
 /// TUM fr2 (ORB-SLAM2 TUM2.yaml): 640x480, 30 Hz, bf 40, ThDepth 40, radial-tangential distortion.
 pub fn tum_fr2() -> Camera {
-    Camera {
-        fx: 520.908620,
-        fy: 521.007327,
-        cx: 325.141442,
-        cy: 249.701764,
-        distortion: Some(Distortion {
-            k1: 0.231222,
-            k2: -0.784899,
-            p1: -0.003257,
-            p2: -0.000105,
-            k3: 0.917205,
-        }),
-        sensor: SensorKind::Rgbd,
-        ..Camera::tum_fr3()
-    }
+    Camera::tum_fr2()
 }
 
 #[cfg(test)]

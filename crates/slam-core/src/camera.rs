@@ -76,6 +76,44 @@ impl Camera {
         }
     }
 
+    /// The TUM fr1 Kinect (ORB-SLAM2's TUM1.yaml): 640x480, 30 Hz, bf 40, ThDepth 40, with the
+    /// radial-tangential distortion TUM calibrated for its colour camera.
+    pub fn tum_fr1() -> Self {
+        Camera {
+            fx: 517.306408,
+            fy: 516.469215,
+            cx: 318.643040,
+            cy: 255.313989,
+            distortion: Some(Distortion {
+                k1: 0.262383,
+                k2: -0.953104,
+                p1: -0.005358,
+                p2: 0.002628,
+                k3: 1.163314,
+            }),
+            ..Camera::tum_fr3()
+        }
+    }
+
+    /// The TUM fr2 Kinect (ORB-SLAM2's TUM2.yaml): 640x480, 30 Hz, bf 40, ThDepth 40, with the
+    /// radial-tangential distortion TUM calibrated for its colour camera.
+    pub fn tum_fr2() -> Self {
+        Camera {
+            fx: 520.908620,
+            fy: 521.007327,
+            cx: 325.141442,
+            cy: 249.701764,
+            distortion: Some(Distortion {
+                k1: 0.231222,
+                k2: -0.784899,
+                p1: -0.003257,
+                p2: -0.000105,
+                k3: 0.917205,
+            }),
+            ..Camera::tum_fr3()
+        }
+    }
+
     /// The rectified EuRoC stereo camera of ORB-SLAM2's EuRoC.yaml (752x480, bf 47.9, ThDepth
     /// 35, 20 Hz): the left camera after rectification, as the stereo benchmarks and tests use.
     pub fn euroc_rectified() -> Self {

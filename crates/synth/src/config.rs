@@ -6,6 +6,8 @@ use std::fmt;
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::handheld::HandHeldPath;
+use crate::imaging::Imaging;
 use crate::recorded::RecordedPath;
 use crate::SynthError;
 
@@ -30,6 +32,9 @@ pub enum Trajectory {
     /// A recorded path: a TUM trajectory file levelled and placed in the room (see
     /// [`crate::recorded`]); time is the recording's, since its first stamp.
     Recorded(Arc<RecordedPath>),
+    /// A hand-held path with a recorded sequence's duration and mean speeds (the twins'; see
+    /// [`crate::handheld`]); time since its start.
+    HandHeld(Arc<HandHeldPath>),
 }
 
 impl Trajectory {
@@ -80,6 +85,7 @@ impl Trajectory {
             Trajectory::Spin => "spin",
             Trajectory::Loop => "loop",
             Trajectory::Recorded(r) => r.label(),
+            Trajectory::HandHeld(h) => h.label(),
         }
     }
 
@@ -88,6 +94,7 @@ impl Trajectory {
     pub fn duration(&self) -> Option<f64> {
         match self {
             Trajectory::Recorded(r) => Some(r.duration()),
+            Trajectory::HandHeld(h) => Some(h.duration()),
             _ => None,
         }
     }
@@ -330,6 +337,9 @@ pub struct SynthConfig {
     pub motion_scale: f64,
     /// Image formation.
     pub image: ImageConfig,
+    /// The colour camera's imaging effects (exposure, rolling shutter, vignetting,
+    /// auto-exposure, sensor noise); all off by default.
+    pub imaging: Imaging,
     /// Depth-sensor model (ignored for stereo).
     pub depth_noise: DepthNoise,
     /// Moving objects, off by default.
@@ -346,6 +356,7 @@ impl Default for SynthConfig {
             trajectory: Trajectory::Xyz,
             motion_scale: 1.0,
             image: ImageConfig::default(),
+            imaging: Imaging::default(),
             depth_noise: DepthNoise::default(),
             moving_objects: None,
             occlusion: None,
@@ -577,6 +588,42 @@ impl SynthConfig {
         if let Supersampling::Grid(n) = self.image.supersampling {
             if !(2..=8).contains(&n) {
                 return bad("grid supersampling must be 2..=8");
+            }
+        }
+        let im = &self.imaging;
+        if let Some(e) = &im.exposure {
+            if !(e.time_s >= 0.0 && e.time_s <= 1.0 / c.fps + 1e-12) {
+                return bad("exposure time must be within 0..one frame period");
+            }
+            if !(1..=64).contains(&e.samples) {
+                return bad("exposure samples must be 1..=64");
+            }
+        }
+        if let Some(r) = &im.rolling_shutter {
+            if !(r.readout_s >= 0.0 && r.readout_s <= 1.0 / c.fps + 1e-12) {
+                return bad("rolling-shutter readout must be within 0..one frame period");
+            }
+        }
+        if let Some(v) = &im.vignetting {
+            if !(0.0..=1.0).contains(&v.corner) {
+                return bad("vignetting corner illumination must be within 0..1");
+            }
+        }
+        if let Some(a) = &im.auto_exposure {
+            if !(a.target > 0.0
+                && a.target < 255.0
+                && (0.0..=1.0).contains(&a.rate)
+                && a.step_ev > 0.0
+                && a.max_time_s > 0.0
+                && a.max_gain >= 1.0
+                && a.history <= 1000)
+            {
+                return bad("auto-exposure needs 0 < target < 255, rate in 0..1, step_ev > 0, max_time_s > 0, max_gain >= 1, history <= 1000");
+            }
+        }
+        if let Some(n) = &im.sensor_noise {
+            if !(n.read_dn >= 0.0 && n.electrons_per_dn > 0.0) {
+                return bad("sensor noise needs read_dn >= 0 and electrons_per_dn > 0");
             }
         }
         if let Some(m) = &self.moving_objects {

@@ -2,15 +2,20 @@
 //! timestamp and exact ground-truth pose — computed from scratch, so frames can be produced in
 //! any order and in parallel with identical bytes.
 
-use std::sync::Arc;
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::{Isometry3, Translation3};
 use slam_core::{Camera, DepthImage, FrameInput, GrayImage};
 
+use crate::config::Supersampling;
 use crate::config::SynthConfig;
 use crate::hash::{NoiseKey, Stream};
-use crate::noise::{noisy_gray8, noisy_rgb8, rgb_to_gray, sensor_depth};
-use crate::render::{Shading, View};
+use crate::imaging::ExposureSettings;
+use crate::noise::{
+    exposed_gray8, exposed_rgb8, noisy_gray8, noisy_rgb8, rgb_to_gray, sensor_depth, Photometry,
+};
+use crate::render::{Exposed, Shading, View};
 use crate::scene::{Scene, MOVING_ID_BASE, OCCLUDER_ID};
 use crate::trajectory::pose_at;
 use crate::SynthError;
@@ -56,12 +61,22 @@ impl SynthFrame {
     }
 }
 
+/// Time samples per pixel of a rolling-shutter render without exposure blur (they only
+/// anti-alias: all fall at the row's instant).
+const ROLLING_SHUTTER_SAMPLES: usize = 4;
+
+/// Side length divisor of the auto-exposure metering preview (640x480 meters at 80x60).
+const METER_DIVISOR: u32 = 8;
+
 /// Generates the frames of one (config, seed) sequence.
 #[derive(Clone, Debug)]
 pub struct Generator {
     config: SynthConfig,
     seed: u64,
     scene: Arc<Scene>,
+    /// Auto-exposure metering previews (grey radiance with vignetting) by frame, a pure
+    /// function of (config, seed, frame) kept to avoid re-rendering the controller's history.
+    metering: Arc<Mutex<BTreeMap<usize, Arc<Vec<f32>>>>>,
 }
 
 impl Generator {
@@ -73,6 +88,7 @@ impl Generator {
             config,
             seed,
             scene,
+            metering: Arc::default(),
         }
     }
 
@@ -174,6 +190,160 @@ impl Generator {
             .is_some_and(|(s, n)| index >= s && index < s.saturating_add(n))
     }
 
+    /// The grey radiance (at the nominal exposure, vignetting included) of a small preview of
+    /// frame `index`: what the auto-exposure meters.
+    fn metering_preview(&self, index: usize) -> Arc<Vec<f32>> {
+        if let Some(p) = self
+            .metering
+            .lock()
+            .ok()
+            .and_then(|m| m.get(&index).cloned())
+        {
+            return p;
+        }
+        let cam = &self.config.camera;
+        let k = METER_DIVISOR as f64;
+        let small = Camera {
+            width: (cam.width / METER_DIVISOR).max(1),
+            height: (cam.height / METER_DIVISOR).max(1),
+            fx: cam.fx / k,
+            fy: cam.fy / k,
+            cx: (cam.cx + 0.5) / k - 0.5,
+            cy: (cam.cy + 0.5) / k - 0.5,
+            ..cam.clone()
+        };
+        let t = self.time(index);
+        let placed = self.scene.place(t);
+        let out = View {
+            scene: &self.scene,
+            placed: &placed,
+            camera: &small,
+            pose_wc: self.pose_at_time(t),
+            occluded: self.occluded(index),
+        }
+        .render(Some(Shading {
+            supersampling: Supersampling::None,
+            ambient: self.config.image.ambient,
+        }));
+        let vig = self.config.imaging.vignetting.as_ref();
+        let w = small.width as usize;
+        let grey: Vec<f32> = out
+            .colour
+            .unwrap_or_default()
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let l = 0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64;
+                let g = vig.map_or(1.0, |v| v.gain(&small, (i % w) as f64, (i / w) as f64));
+                (l * g) as f32
+            })
+            .collect();
+        let grey = Arc::new(grey);
+        if let Ok(mut m) = self.metering.lock() {
+            // Keep a window of recent frames: sequential generation re-reads only the last
+            // `history` previews.
+            let keep = self
+                .config
+                .imaging
+                .auto_exposure
+                .as_ref()
+                .map_or(0, |a| 2 * a.history + 2);
+            while m.len() > keep.max(1) {
+                let Some((&first, _)) = m.iter().next() else {
+                    break;
+                };
+                m.remove(&first);
+            }
+            m.insert(index, grey.clone());
+        }
+        grey
+    }
+
+    /// Exposure time, gain and radiance scale of frame `index`. Without auto-exposure: the
+    /// nominal exposure at unit gain. With it: the controller run from a converged start
+    /// `history` frames back, metering each frame's preview as the sensor would see it at the
+    /// settings of that frame (clipped at 255).
+    pub fn exposure_settings(&self, index: usize) -> ExposureSettings {
+        let im = &self.config.imaging;
+        let nominal = im.exposure.as_ref().map_or(0.0, |e| e.time_s);
+        let Some(ae) = &im.auto_exposure else {
+            return ExposureSettings {
+                scale: 1.0,
+                time_s: nominal,
+                gain: 1.0,
+            };
+        };
+        let start = index.saturating_sub(ae.history);
+        let meter = |j: usize, scale: f64| {
+            let p = self.metering_preview(j);
+            p.iter()
+                .map(|&l| (l as f64 * scale).min(255.0))
+                .sum::<f64>()
+                / p.len().max(1) as f64
+        };
+        // Converged at the start: the quantised scale that meters the target.
+        // The controller's state is the scale the sensor can realise (exposure time and gain
+        // within their limits).
+        let mut scale = ae.settings(ae.converged(meter(start, 1.0)), nominal).scale;
+        for j in start..index {
+            scale = ae.settings(ae.step(scale, meter(j, scale)), nominal).scale;
+        }
+        ae.settings(scale, nominal)
+    }
+
+    fn photometry<'a>(&'a self, settings: &ExposureSettings) -> Photometry<'a> {
+        let im = &self.config.imaging;
+        Photometry {
+            camera: &self.config.camera,
+            scale: settings.scale,
+            gain: settings.gain,
+            vignetting: im.vignetting.as_ref(),
+            sensor: im.sensor_noise.as_ref(),
+            sigma: self.config.image.noise_sigma,
+        }
+    }
+
+    /// Whether any photometric effect is on (else the older constant-noise path is used).
+    fn photometric(&self) -> bool {
+        let im = &self.config.imaging;
+        im.vignetting.is_some() || im.auto_exposure.is_some() || im.sensor_noise.is_some()
+    }
+
+    /// Colour exposed over time (motion blur / rolling shutter) of the camera at `offset` from
+    /// the left / colour camera.
+    fn exposed_colour(
+        &self,
+        t: f64,
+        offset: Option<Translation3<f64>>,
+        occluded: bool,
+        settings: &ExposureSettings,
+    ) -> Vec<[f32; 3]> {
+        let im = &self.config.imaging;
+        let pose_at = |s: f64| match offset {
+            Some(o) => self.pose_at_time(s) * o,
+            None => self.pose_at_time(s),
+        };
+        let (exposure_s, samples) = match &im.exposure {
+            Some(e) => (settings.time_s, e.samples as usize),
+            None => (0.0, ROLLING_SHUTTER_SAMPLES),
+        };
+        Exposed {
+            scene: &self.scene,
+            camera: &self.config.camera,
+            pose_at: &pose_at,
+            occluded,
+            time: t,
+            exposure_s,
+            readout_s: im.rolling_shutter.as_ref().map_or(0.0, |r| r.readout_s),
+            samples,
+            shading: Shading {
+                supersampling: self.config.image.supersampling,
+                ambient: self.config.image.ambient,
+            },
+        }
+        .render()
+    }
+
     /// Generates frame `index` (deterministic in (config, seed, index)).
     pub fn frame(&self, index: usize) -> SynthFrame {
         let cam = &self.config.camera;
@@ -193,10 +363,18 @@ impl Generator {
             pose_wc,
             occluded,
         };
-        let left = view.render(Some(shading));
+        let timed = self.config.imaging.is_timed();
+        let settings = self.exposure_settings(index);
+        let left = view.render(if timed { None } else { Some(shading) });
+        let exposed;
+        let colour: &[[f32; 3]] = if timed {
+            exposed = self.exposed_colour(t, None, occluded, &settings);
+            &exposed
+        } else {
+            left.colour.as_deref().unwrap_or(&[])
+        };
         let sigma = self.config.image.noise_sigma;
         let key_left = NoiseKey::new(self.seed, index, Stream::ImageLeft);
-        let colour = left.colour.as_deref().unwrap_or(&[]);
         let moving_mask = self.config.moving_objects.as_ref().map(|_| {
             left.ids
                 .iter()
@@ -209,7 +387,11 @@ impl Generator {
             data: left.depth.clone(),
         });
         if self.config.is_rgbd() {
-            let rgb = noisy_rgb8(colour, sigma, key_left);
+            let rgb = if self.photometric() {
+                exposed_rgb8(colour, &self.photometry(&settings), key_left)
+            } else {
+                noisy_rgb8(colour, sigma, key_left)
+            };
             let gray = GrayImage {
                 width: w,
                 height: h,
@@ -262,24 +444,36 @@ impl Generator {
                 moving_mask,
             }
         } else {
+            let gray_of = |colour: &[[f32; 3]], key: NoiseKey| {
+                if self.photometric() {
+                    exposed_gray8(colour, &self.photometry(&settings), key)
+                } else {
+                    noisy_gray8(colour, sigma, key)
+                }
+            };
             let gray = GrayImage {
                 width: w,
                 height: h,
-                data: noisy_gray8(colour, sigma, key_left),
+                data: gray_of(colour, key_left),
             };
-            let right_view = View {
-                scene: &self.scene,
-                placed: &placed,
-                camera: cam,
-                pose_wc: pose_wc * Translation3::new(cam.baseline(), 0.0, 0.0),
-                occluded,
+            let offset = Translation3::new(cam.baseline(), 0.0, 0.0);
+            let right_colour = if timed {
+                self.exposed_colour(t, Some(offset), occluded, &settings)
+            } else {
+                let right_view = View {
+                    scene: &self.scene,
+                    placed: &placed,
+                    camera: cam,
+                    pose_wc: pose_wc * offset,
+                    occluded,
+                };
+                right_view.render(Some(shading)).colour.unwrap_or_default()
             };
-            let right = right_view.render(Some(shading));
             let key_right = NoiseKey::new(self.seed, index, Stream::ImageRight);
             let right = GrayImage {
                 width: w,
                 height: h,
-                data: noisy_gray8(right.colour.as_deref().unwrap_or(&[]), sigma, key_right),
+                data: gray_of(&right_colour, key_right),
             };
             SynthFrame {
                 index,

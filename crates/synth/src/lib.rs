@@ -6,8 +6,12 @@
 //! - [`config`]: `SynthConfig`, each noise component its own switch, and the named presets;
 //! - [`scene`], [`texture`]: the textured room, its objects and walking "people";
 //! - [`trajectory`]: smooth `xyz`, `rpy`, `spin` and `loop` camera paths;
+//! - [`handheld`]: hand-held paths with a recorded sequence's duration and mean speeds;
 //! - [`recorded`]: recorded TUM trajectories levelled and placed in the room, interpolated;
-//! - [`render`]: the parallel ray-caster (depth, incidence, ids, anti-aliased colour);
+//! - [`render`]: the parallel ray-caster (depth, incidence, ids, anti-aliased colour, lens
+//!   distortion, colour exposed over time);
+//! - [`imaging`]: the colour camera's exposure, rolling shutter, vignetting, auto-exposure and
+//!   sensor noise;
 //! - [`noise`]: the depth-sensor model and image noise;
 //! - [`hash`]: counter-based per-pixel randomness (order- and thread-independent);
 //! - [`generator`]: random access to frames of a (config, seed) sequence;
@@ -18,7 +22,9 @@ pub mod config;
 pub mod contact;
 pub mod euroc;
 pub mod generator;
+pub mod handheld;
 pub mod hash;
+pub mod imaging;
 pub mod noise;
 pub mod recorded;
 pub mod render;
@@ -38,6 +44,7 @@ pub use config::{
 pub use contact::{contact_sheet, write_contact_sheet};
 pub use euroc::write_euroc;
 pub use generator::{Generator, SynthFrame};
+pub use imaging::Imaging;
 pub use recorded::RecordedPath;
 pub use tum::write_tum;
 

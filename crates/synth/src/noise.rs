@@ -149,6 +149,81 @@ pub fn noisy_rgb8(colour: &[[f32; 3]], sigma: f64, key: NoiseKey) -> Vec<u8> {
         .collect()
 }
 
+/// The photometric chain of a real sensor, for [`exposed_rgb8`] and [`exposed_gray8`]: radiance
+/// times the exposure scale and the vignetting, plus shot and read noise (or the constant
+/// `sigma` when the sensor noise is off), rounded and clipped to 8 bits.
+pub struct Photometry<'a> {
+    /// Image size and principal point (for vignetting).
+    pub camera: &'a Camera,
+    /// Multiplier of the radiance (auto-exposure; 1 without).
+    pub scale: f64,
+    /// Analogue gain (amplifies the sensor noise).
+    pub gain: f64,
+    /// Vignetting, if on.
+    pub vignetting: Option<&'a crate::imaging::Vignetting>,
+    /// Shot and read noise, if on.
+    pub sensor: Option<&'a crate::imaging::SensorNoise>,
+    /// Constant grey-level sigma used when `sensor` is off.
+    pub sigma: f64,
+}
+
+impl Photometry<'_> {
+    /// The noise-free level of radiance `c` under vignetting `vig`, and its noise sigma.
+    #[inline]
+    fn level(&self, c: f64, vig: f64) -> (f64, f64) {
+        let level = c * self.scale * vig;
+        let sigma = match self.sensor {
+            Some(s) => s.sigma(level, self.gain),
+            None => self.sigma,
+        };
+        (level, sigma)
+    }
+
+    /// Relative illumination of pixel `i` (row-major).
+    #[inline]
+    fn vignetting_at(&self, i: usize) -> f64 {
+        match self.vignetting {
+            Some(v) => {
+                let w = self.camera.width as usize;
+                v.gain(self.camera, (i % w) as f64, (i / w) as f64)
+            }
+            None => 1.0,
+        }
+    }
+}
+
+/// [`noisy_rgb8`] through a real sensor's photometric chain ([`Photometry`]); the random
+/// numbers are drawn exactly as [`noisy_rgb8`] draws them.
+pub fn exposed_rgb8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec<u8> {
+    colour
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, c)| {
+            let (n0, n1) = key.normal2(2 * i as u64);
+            let n2 = key.normal(2 * i as u64 + 1);
+            let n = [n0, n1, n2];
+            let vig = ph.vignetting_at(i);
+            (0..3).map(move |k| {
+                let (level, sigma) = ph.level(c[k] as f64, vig);
+                grey_level(level + sigma * n[k])
+            })
+        })
+        .collect()
+}
+
+/// [`noisy_gray8`] through a real sensor's photometric chain ([`Photometry`]).
+pub fn exposed_gray8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec<u8> {
+    colour
+        .par_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let l = 0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64;
+            let (level, sigma) = ph.level(l, ph.vignetting_at(i));
+            grey_level(level + sigma * key.normal(i as u64))
+        })
+        .collect()
+}
+
 /// Grey from RGB8 with OpenCV's `COLOR_RGB2GRAY` fixed-point weights (as the TUM readers
 /// convert the colour PNGs), so that memory and disk give the same grey image.
 pub fn rgb_to_gray(rgb: &[u8]) -> Vec<u8> {

@@ -1,7 +1,9 @@
-//! The ray-caster: renders a view of the placed scene through a pinhole camera into a
-//! z-depth image, incidence angles, object ids and (optionally) a Lambertian-shaded,
-//! anti-aliased colour image. Rows are rendered in parallel with rayon; the output is a pure
-//! function of the inputs, so it is bit-identical for any number of threads.
+//! The ray-caster: renders a view of the placed scene through the camera (pinhole, or with the
+//! camera's radial-tangential lens distortion written into the image) into a z-depth image,
+//! incidence angles, object ids and (optionally) a Lambertian-shaded, anti-aliased colour
+//! image; [`render_exposed`] renders colour sample by sample in time (motion blur, rolling
+//! shutter). Rows are rendered in parallel with rayon; the output is a pure function of the
+//! inputs, so it is bit-identical for any number of threads.
 
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
@@ -63,11 +65,18 @@ struct Sample {
 }
 
 impl View<'_> {
-    /// Casts the ray through (undistorted) pixel coordinates (u, v) and shades it when `shade`.
+    /// Casts the ray through raw pixel coordinates (u, v) — through the lens distortion when
+    /// the camera has one — and shades it when `shade`.
     #[inline]
     fn cast(&self, placed: &[Placed], u: f64, v: f64, shade: Option<&Shading>) -> Sample {
         let c = self.camera;
-        let dc = Vector3::new((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0);
+        let dc = match c.distortion {
+            None => Vector3::new((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0),
+            Some(_) => {
+                let (uu, vu) = c.undistort_point(u, v);
+                Vector3::new((uu - c.cx) / c.fx, (vu - c.cy) / c.fy, 1.0)
+            }
+        };
         if self.occluded {
             return Sample {
                 t: OCCLUDER_DEPTH,
@@ -100,8 +109,21 @@ impl View<'_> {
     }
 
     /// Conservative image-space bounds (u0, u1, v0, v1) of each placed object's bounding
-    /// sphere, or the whole plane when the sphere reaches behind the camera.
+    /// sphere, or the whole plane when the sphere reaches behind the camera; through the lens
+    /// distortion when the camera has one.
     fn screen_bounds(&self) -> Vec<[f64; 4]> {
+        let pinhole = self.pinhole_bounds();
+        if self.camera.distortion.is_none() {
+            return pinhole;
+        }
+        pinhole
+            .into_iter()
+            .map(|b| distort_bounds(self.camera, b))
+            .collect()
+    }
+
+    /// [`View::screen_bounds`] of an ideal pinhole camera.
+    fn pinhole_bounds(&self) -> Vec<[f64; 4]> {
         let c = self.camera;
         let inv = self.pose_wc.inverse();
         let all = [
@@ -243,6 +265,119 @@ impl View<'_> {
             ids: centre.iter().map(|s| s.id).collect(),
             colour,
         }
+    }
+}
+
+/// The raw-image bounds of an ideal-pixel box: the box is clipped to a margin around the image
+/// (where the distortion polynomial is monotone), its boundary distorted at 32 points per
+/// edge, and the extremes widened by 2 pixels. A box that misses the clipped region maps to an
+/// empty (inverted) box; an unbounded one stays unbounded.
+fn distort_bounds(camera: &Camera, b: [f64; 4]) -> [f64; 4] {
+    if b.iter().any(|x| !x.is_finite()) {
+        return b;
+    }
+    let (w, h) = (camera.width as f64, camera.height as f64);
+    let (mu, mv) = (0.25 * w, 0.25 * h);
+    let u0 = b[0].max(-mu);
+    let u1 = b[1].min(w + mu);
+    let v0 = b[2].max(-mv);
+    let v1 = b[3].min(h + mv);
+    if u0 > u1 || v0 > v1 {
+        return [1.0, 0.0, 1.0, 0.0];
+    }
+    let mut out = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    const N: usize = 32;
+    for i in 0..=N {
+        let a = i as f64 / N as f64;
+        let (u, v) = (u0 + a * (u1 - u0), v0 + a * (v1 - v0));
+        for (x, y) in [(u, v0), (u, v1), (u0, v), (u1, v)] {
+            let (xd, yd) = camera.distort_point(x, y);
+            out[0] = out[0].min(xd);
+            out[1] = out[1].max(xd);
+            out[2] = out[2].min(yd);
+            out[3] = out[3].max(yd);
+        }
+    }
+    // A box clipped at the margin may reach beyond it: keep it open on that side.
+    if b[0] < -mu {
+        out[0] = f64::NEG_INFINITY;
+    }
+    if b[1] > w + mu {
+        out[1] = f64::INFINITY;
+    }
+    if b[2] < -mv {
+        out[2] = f64::NEG_INFINITY;
+    }
+    if b[3] > h + mv {
+        out[3] = f64::INFINITY;
+    }
+    [out[0] - 2.0, out[1] + 2.0, out[2] - 2.0, out[3] + 2.0]
+}
+
+/// A colour image exposed over time: where the camera and the objects are at any instant.
+pub struct Exposed<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Intrinsics, image size and lens distortion.
+    pub camera: &'a Camera,
+    /// Camera-to-world pose at a time (seconds since frame 0).
+    pub pose_at: &'a (dyn Fn(f64) -> Isometry3<f64> + Sync),
+    /// Whether the featureless occluder covers the lens.
+    pub occluded: bool,
+    /// Time of the stamp (middle of the exposure of the middle row), seconds since frame 0.
+    pub time: f64,
+    /// Exposure time, seconds (0: a snapshot per row).
+    pub exposure_s: f64,
+    /// Rolling-shutter readout time from the first to the last row, seconds (0: global).
+    pub readout_s: f64,
+    /// Time samples per pixel (>= 1), each with its own sub-pixel ray.
+    pub samples: usize,
+    /// Shading.
+    pub shading: Shading,
+}
+
+impl Exposed<'_> {
+    /// Renders the colour image: each pixel averages `samples` rays, sample `k` of row `v` cast
+    /// at [`crate::imaging::sample_offset`] inside the pixel and at the instant
+    /// `time + row_time(v) + sample_time(k)`, with the camera and the objects where they are at
+    /// that instant.
+    pub fn render(&self) -> Vec<[f32; 3]> {
+        use crate::imaging::{row_time, sample_offset, sample_time};
+        let (w, h) = (self.camera.width as usize, self.camera.height as usize);
+        let n = self.samples.max(1);
+        let inv = 1.0 / n as f32;
+        (0..h)
+            .into_par_iter()
+            .flat_map_iter(|v| {
+                let t_row = self.time + row_time(v as f64, h, self.readout_s);
+                let mut acc = vec![[0.0f32; 3]; w];
+                for k in 0..n {
+                    let t = t_row + sample_time(k, n, self.exposure_s);
+                    let placed = self.scene.place(t);
+                    let view = View {
+                        scene: self.scene,
+                        placed: &placed,
+                        camera: self.camera,
+                        pose_wc: (self.pose_at)(t),
+                        occluded: self.occluded,
+                    };
+                    let bounds = view.screen_bounds();
+                    let (dx, dy) = sample_offset(k, n);
+                    let r = view.row(&bounds, dx, v as f64 + dy, w, Some(&self.shading));
+                    for (a, s) in acc.iter_mut().zip(&r) {
+                        for (ak, ck) in a.iter_mut().zip(s.colour) {
+                            *ak += ck;
+                        }
+                    }
+                }
+                acc.into_iter().map(move |a| a.map(|x| x * inv))
+            })
+            .collect()
     }
 }
 

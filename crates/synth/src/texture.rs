@@ -103,6 +103,26 @@ impl Texture {
         t
     }
 
+    /// A texture of `width_m` x `height_m` metres at `texels_per_m`, texel (i, j) coloured
+    /// `f(s, t)` at its centre (s, t in metres): test patterns and calibration targets.
+    pub fn from_fn(
+        width_m: f64,
+        height_m: f64,
+        texels_per_m: f64,
+        f: impl Fn(f64, f64) -> [u8; 3],
+    ) -> Texture {
+        let w = ((width_m * texels_per_m).round() as usize).max(1);
+        let h = ((height_m * texels_per_m).round() as usize).max(1);
+        let scale = w as f64 / width_m;
+        let mut data = Vec::with_capacity(w * h);
+        for j in 0..h {
+            for i in 0..w {
+                data.push(f((i as f64 + 0.5) / scale, (j as f64 + 0.5) / scale));
+            }
+        }
+        Texture { w, h, scale, data }
+    }
+
     /// Width and height in metres.
     pub fn size_m(&self) -> (f64, f64) {
         (self.w as f64 / self.scale, self.h as f64 / self.scale)

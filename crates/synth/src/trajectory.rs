@@ -71,6 +71,7 @@ fn loop_pose(t: f64) -> (Vector3<f64>, Rotation3<f64>) {
 pub fn pose_at(trajectory: &Trajectory, t: f64) -> Isometry3<f64> {
     let (eye, rot) = match trajectory {
         Trajectory::Recorded(path) => return path.pose_at(t),
+        Trajectory::HandHeld(path) => return path.pose_at(t),
         Trajectory::Loop => loop_pose(t),
         Trajectory::Xyz => {
             let eye = Vector3::new(
