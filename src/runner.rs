@@ -327,6 +327,7 @@ mod tests {
             data_dir: PathBuf::new(),
             frames: Some(frames),
             synth_seed: 1,
+            synth_without: Vec::new(),
         }
     }
 

@@ -50,6 +50,8 @@ pub struct LoadOptions {
     pub frames: Option<usize>,
     /// Seed of a synthetic sequence's noise and scene (the sequence, not the SLAM run).
     pub synth_seed: u64,
+    /// Effects switched off in a synthetic sequence (`synth::EFFECTS` names).
+    pub synth_without: Vec<String>,
 }
 
 /// Loads (or generates) the sequence of `source`, every frame decoded.
@@ -77,7 +79,11 @@ pub fn open(
             let entry = catalog.get(name)?;
             if let Some(preset) = &entry.preset {
                 let preset = synth::Preset::from_name(preset)?;
-                let generator = synth::Generator::try_new(preset.config(), opts.synth_seed)?;
+                let mut config = preset.config();
+                for effect in &opts.synth_without {
+                    config.without(effect.trim())?;
+                }
+                let generator = synth::Generator::try_new(config, opts.synth_seed)?;
                 let n = opts.frames.unwrap_or_else(|| preset.default_frames());
                 if n == 0 {
                     bail!("--frames must be at least 1");

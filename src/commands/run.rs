@@ -65,6 +65,11 @@ pub struct RunArgs {
     /// Seed of a synthetic sequence's scene and noise (independent of --seed).
     #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
     pub synth_seed: u64,
+    /// Synthetic sequences: effects to switch off, comma-separated (an ablation): lens, blur,
+    /// rolling_shutter, vignetting, auto_exposure, sensor_noise, image_noise, tremor, depth_lag,
+    /// axial, quantisation, lateral, holes, misregistration, depth_distortion.
+    #[arg(long = "synth-without", value_name = "EFFECTS", value_delimiter = ',')]
+    pub synth_without: Vec<String>,
     /// Data root for catalogued real sequences [default: $NOISEFREE_DATA, else ./data].
     #[arg(long = "data-dir", value_name = "DIR")]
     pub data_dir: Option<PathBuf>,
@@ -153,6 +158,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         data_dir: datasets::data_root(args.data_dir.as_deref()),
         frames: args.frames,
         synth_seed: args.synth_seed,
+        synth_without: args.synth_without.clone(),
     };
     if !args.quiet {
         eprintln!("loading {label} ...");

@@ -53,6 +53,11 @@ pub struct SynthArgs {
     /// stereo: left | right | true depth) of 4 frames spread over the sequence.
     #[arg(long, value_name = "FILE.png")]
     pub contact_sheet: Option<PathBuf>,
+    /// Effects to switch off, comma-separated (an ablation): lens, blur,
+    /// rolling_shutter, vignetting, auto_exposure, sensor_noise, image_noise, tremor, depth_lag,
+    /// axial, quantisation, lateral, holes, misregistration, depth_distortion.
+    #[arg(long = "synth-without", value_name = "EFFECTS", value_delimiter = ',')]
+    pub synth_without: Vec<String>,
     /// Remove the output folder first if it exists and is not empty.
     #[arg(long)]
     pub force: bool,
@@ -86,6 +91,9 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     }
     if let Some(o) = &args.occlusion {
         config.occlusion = Some(parse_occlusion(o)?);
+    }
+    for effect in &args.synth_without {
+        config.without(effect.trim())?;
     }
     let frames = args.frames.unwrap_or_else(|| preset.default_frames());
     if frames == 0 {

@@ -139,6 +139,10 @@ pub struct Entry {
     /// Synthetic preset name (`synth::SynthConfig::preset`).
     #[serde(default)]
     pub preset: Option<String>,
+    /// For a synthetic twin: the catalog name of the real sequence it imitates (whose paper
+    /// figures its tables print beside it).
+    #[serde(default)]
+    pub imitates: Option<String>,
     /// Frame count, where known (Table IV of the paper, or the dataset's own listing).
     #[serde(default)]
     pub frames: Option<usize>,
@@ -213,6 +217,24 @@ impl Catalog {
             }
         };
         let mut entries = file.sequences;
+        // A twin's `imitates` must name a real (non-synthetic) sequence of the file.
+        for e in &entries {
+            if let Some(real) = &e.imitates {
+                let found = entries
+                    .iter()
+                    .any(|r| &r.name == real && r.format != EntryFormat::Synthetic);
+                if !found {
+                    return Err(DatasetError::parse(
+                        origin,
+                        0,
+                        format!(
+                            "sequence `{}`: imitates `{real}`, which is not a real sequence of the catalog",
+                            e.name
+                        ),
+                    ));
+                }
+            }
+        }
         let mut seen = std::collections::BTreeSet::new();
         for e in &mut entries {
             if !seen.insert(e.name.to_ascii_lowercase()) {

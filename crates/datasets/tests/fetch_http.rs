@@ -145,6 +145,7 @@ fn entry(name: &str, format: EntryFormat, url: String, folder: &str) -> Entry {
         class: None,
         paper: None,
         preset: None,
+        imitates: None,
         frames: None,
         note: None,
     }

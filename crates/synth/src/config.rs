@@ -409,6 +409,8 @@ pub enum Preset {
     /// `distorted` depth error, stronger. Its default length is the circuit plus the revisit
     /// ([`Preset::default_frames`]).
     Loop,
+    /// A twin of one of the paper's TUM sequences: index into [`crate::twins::TWINS`].
+    Twin(usize),
 }
 
 const PRESETS: [(Preset, &str); 10] = [
@@ -424,32 +426,26 @@ const PRESETS: [(Preset, &str); 10] = [
     (Preset::Loop, "loop"),
 ];
 
-const PRESET_NAMES: [&str; 10] = [
-    "clean",
-    "kinect",
-    "boundary",
-    "walking",
-    "stereo",
-    "distorted",
-    "lag",
-    "hard",
-    "occluded",
-    "loop",
-];
-
-/// Names of all presets, easy to hard.
+/// Names of all presets: the effect presets easy to hard, then the twins.
 pub fn preset_names() -> &'static [&'static str] {
-    &PRESET_NAMES
+    static NAMES: std::sync::OnceLock<Vec<&'static str>> = std::sync::OnceLock::new();
+    NAMES.get_or_init(|| Preset::all().map(|p| p.name()).collect())
 }
 
 impl Preset {
-    /// All presets, easy to hard.
+    /// All presets: the effect presets easy to hard, then the twins in Table III order.
     pub fn all() -> impl Iterator<Item = Preset> {
-        PRESETS.iter().map(|(p, _)| *p)
+        PRESETS
+            .iter()
+            .map(|(p, _)| *p)
+            .chain((0..crate::twins::TWINS.len()).map(Preset::Twin))
     }
 
     /// The preset's name.
     pub fn name(&self) -> &'static str {
+        if let Preset::Twin(i) = self {
+            return crate::twins::TWINS.get(*i).map_or("?", |t| t.name);
+        }
         PRESETS
             .iter()
             .find(|(p, _)| p == self)
@@ -459,15 +455,21 @@ impl Preset {
 
     /// Looks a preset up by name; the error lists the valid names.
     pub fn from_name(name: &str) -> Result<Preset, SynthError> {
-        PRESETS
-            .iter()
-            .find(|(_, n)| *n == name)
-            .map(|(p, _)| *p)
+        Preset::all()
+            .find(|p| p.name() == name)
             .ok_or_else(|| SynthError::UnknownName {
                 what: "preset",
                 name: name.to_string(),
-                valid: PRESET_NAMES.join(", "),
+                valid: preset_names().join(", "),
             })
+    }
+
+    /// The twin this preset is, if it is one.
+    pub fn twin(&self) -> Option<&'static crate::twins::TwinSpec> {
+        match self {
+            Preset::Twin(i) => crate::twins::TWINS.get(*i),
+            _ => None,
+        }
     }
 
     /// The configuration of this preset.
@@ -525,6 +527,7 @@ impl Preset {
                 occlusion: Some((120, 30)),
                 ..kinect
             },
+            Preset::Twin(i) => crate::twins::config(&crate::twins::TWINS[*i]),
             Preset::Loop => {
                 let mut c = kinect;
                 c.trajectory = Trajectory::Loop;
@@ -540,10 +543,12 @@ impl Preset {
 
     /// Frames a sequence of this preset has when the user does not say: 300 (10 s at 30 Hz),
     /// except `loop`: its whole circuit plus 15 s of revisit (55 s, 1650 frames), enough
-    /// keyframes in the revisited place for loop closing's 3-keyframe consistency check.
+    /// keyframes in the revisited place for loop closing's 3-keyframe consistency check; and the
+    /// twins: their real sequence's duration.
     pub fn default_frames(&self) -> usize {
         match self {
             Preset::Loop => 1650,
+            Preset::Twin(i) => crate::twins::frames(&crate::twins::TWINS[*i]),
             _ => 300,
         }
     }
@@ -555,7 +560,92 @@ impl fmt::Display for Preset {
     }
 }
 
+/// The effects a configuration can be stripped of one at a time ([`SynthConfig::without`]),
+/// with what each removes: the names of an ablation.
+pub const EFFECTS: [(&str, &str); 15] = [
+    (
+        "lens",
+        "lens distortion written into the images (the camera becomes a pinhole)",
+    ),
+    ("blur", "exposure integration: motion blur"),
+    ("rolling_shutter", "rows read out one after another"),
+    ("vignetting", "brightness fall-off towards the corners"),
+    (
+        "auto_exposure",
+        "exposure and gain following the scene's brightness",
+    ),
+    (
+        "sensor_noise",
+        "shot and read noise (the constant image noise stays)",
+    ),
+    (
+        "image_noise",
+        "all image noise: sensor noise and the constant grey-level noise",
+    ),
+    (
+        "tremor",
+        "hand tremor on a hand-held path (mean speeds re-solved without it)",
+    ),
+    (
+        "depth_lag",
+        "depth sampled at a different instant from colour",
+    ),
+    ("axial", "axial depth noise"),
+    ("quantisation", "disparity quantisation of depth"),
+    ("lateral", "lateral depth noise"),
+    (
+        "holes",
+        "depth holes (range, grazing incidence, boundaries)",
+    ),
+    ("misregistration", "RGB-depth misregistration"),
+    ("depth_distortion", "systematic depth distortion"),
+];
+
 impl SynthConfig {
+    /// This configuration without the effect called `name` (see [`EFFECTS`]); an unknown name
+    /// is an error listing the valid ones. Removing an effect the configuration does not have
+    /// changes nothing.
+    pub fn without(&mut self, name: &str) -> Result<(), SynthError> {
+        let d = &mut self.depth_noise;
+        match name {
+            "lens" => self.camera.distortion = None,
+            "blur" => self.imaging.exposure = None,
+            "rolling_shutter" => self.imaging.rolling_shutter = None,
+            "vignetting" => self.imaging.vignetting = None,
+            "auto_exposure" => self.imaging.auto_exposure = None,
+            "sensor_noise" => self.imaging.sensor_noise = None,
+            "image_noise" => {
+                self.imaging.sensor_noise = None;
+                self.image.noise_sigma = 0.0;
+            }
+            "tremor" => {
+                if let Trajectory::HandHeld(p) = &self.trajectory {
+                    let mut spec = p.spec().clone();
+                    spec.tremor = crate::handheld::Tremor {
+                        position_m: 0.0,
+                        angle_rad: 0.0,
+                    };
+                    self.trajectory = Trajectory::HandHeld(Arc::new(HandHeldPath::new(spec)));
+                }
+            }
+            "depth_lag" => d.lag = None,
+            "axial" => d.axial = None,
+            "quantisation" => d.quantisation = None,
+            "lateral" => d.lateral = None,
+            "holes" => d.holes = None,
+            "misregistration" => d.misregistration = None,
+            "depth_distortion" => d.distortion = None,
+            _ => {
+                return Err(SynthError::UnknownName {
+                    what: "effect",
+                    name: name.to_string(),
+                    valid: EFFECTS.map(|e| e.0).join(", "),
+                })
+            }
+        }
+        Ok(())
+    }
+
     /// The configuration of the preset called `name`; the error lists the valid names.
     pub fn preset(name: &str) -> Result<SynthConfig, SynthError> {
         Ok(Preset::from_name(name)?.config())
@@ -657,6 +747,25 @@ mod tests {
             p.config().validate().unwrap();
         }
         assert_eq!(Preset::all().count(), preset_names().len());
+    }
+
+    #[test]
+    fn every_effect_can_be_removed_alone() {
+        let full = SynthConfig::preset("twin_fr1_desk").unwrap();
+        for (name, _) in EFFECTS {
+            let mut c = full.clone();
+            c.without(name).unwrap();
+            c.validate().unwrap();
+            // Each effect the twin has is gone and nothing else changed.
+            let mut again = c.clone();
+            again.without(name).unwrap();
+            assert_eq!(again, c, "{name}: removing twice is removing once");
+            if !matches!(name, "misregistration" | "depth_distortion") {
+                assert_ne!(c, full, "{name}: the twin has this effect");
+            }
+        }
+        let e = full.clone().without("fog").unwrap_err().to_string();
+        assert!(e.contains("fog") && e.contains("rolling_shutter"), "{e}");
     }
 
     #[test]

@@ -34,6 +34,18 @@ pub struct Tremor {
     pub angle_rad: f64,
 }
 
+/// A walk round a closed ellipse in the floor plane (fr3_long_office_household circles its
+/// desks): the eye's box rides along it; the speed of the walk follows from the time scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orbit {
+    /// Semi-axes along x and y, metres (about the eye box's centre).
+    pub semi_axes: [f64; 2],
+    /// Angle on the ellipse at the start, radians.
+    pub start_rad: f64,
+    /// Turns per second of path time, before time scaling.
+    pub rate: f64,
+}
+
 /// What a hand-held path must reproduce and where it may go.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MotionSpec {
@@ -51,6 +63,12 @@ pub struct MotionSpec {
     pub target: Region,
     /// Whole turns about the vertical over the duration (fr1_360: about one).
     pub turns: f64,
+    /// A walk round an ellipse carrying the eye's box, if any.
+    pub orbit: Option<Orbit>,
+    /// Whether the camera keeps pointing at the target while the eye moves (`true`), or keeps
+    /// the orientation it has from the eye box's centre (`false`: translation without the
+    /// rotation that tracking would add, as in TUM's `xyz` sequences).
+    pub track_target: bool,
     /// Roll amplitude about the optical axis before scaling, radians.
     pub roll_rad: f64,
     /// Hand tremor.
@@ -176,6 +194,13 @@ impl HandHeldPath {
         self.rotation_scale = 0.5 * (lo + hi);
     }
 
+    /// Scale of the target box and the roll that reaches the spec's angular speed; 0 when the
+    /// path turns faster than asked even without them (an orbit's own turning, the look-at
+    /// tracking of the eye's motion).
+    pub fn rotation_scale(&self) -> f64 {
+        self.rotation_scale
+    }
+
     /// The spec.
     pub fn spec(&self) -> &MotionSpec {
         &self.spec
@@ -196,8 +221,13 @@ impl HandHeldPath {
         let s = &self.spec;
         let u = t * self.time_scale;
         let tp = s.tremor.position_m;
+        let orbit = s.orbit.map_or([0.0; 3], |o| {
+            let a = o.start_rad + TAU * o.rate * u;
+            [o.semi_axes[0] * a.cos(), o.semi_axes[1] * a.sin(), 0.0]
+        });
         let eye = Vector3::from_fn(|i, _| {
             s.eye.centre[i]
+                + orbit[i]
                 + s.eye.half[i] * sum(&self.eye[i], u)
                 + tp * sum(&self.tremor_pos[i], t)
         });
@@ -207,8 +237,13 @@ impl HandHeldPath {
         // Turns about the vertical carry the look direction round the eye.
         let yaw = TAU * s.turns * t / s.duration_s.max(1e-9);
         let spin = Rotation3::from_axis_angle(&Vector3::z_axis(), yaw);
-        let target = eye + spin * (centre + target_offset - eye);
-        let base = look_at(&eye, &target);
+        let from = if s.track_target {
+            eye
+        } else {
+            Vector3::from(s.eye.centre)
+        };
+        let target = from + spin * (centre + target_offset - from);
+        let base = look_at(&from, &target);
         let roll = k * s.roll_rad * sum(&self.roll, u);
         let ta = s.tremor.angle_rad;
         let tremor = Rotation3::from_euler_angles(
@@ -270,6 +305,8 @@ mod tests {
                 half: [0.4, 0.1, 0.2],
             },
             turns: 0.0,
+            orbit: None,
+            track_target: true,
             roll_rad: 0.1,
             tremor: Tremor {
                 position_m: 0.001,

@@ -15,6 +15,7 @@
 //! - [`noise`]: the depth-sensor model and image noise;
 //! - [`hash`]: counter-based per-pixel randomness (order- and thread-independent);
 //! - [`generator`]: random access to frames of a (config, seed) sequence;
+//! - [`twins`]: twins of the paper's TUM sequences (camera, motion statistics, imaging);
 //! - [`tum`], [`euroc`]: writers of the TUM RGB-D and EuRoC ASL folder layouts;
 //! - [`contact`]: a contact-sheet picture (RGB | depth | depth noise) of a sequence.
 
@@ -32,6 +33,7 @@ pub mod scene;
 pub mod texture;
 pub mod trajectory;
 pub mod tum;
+pub mod twins;
 mod write;
 
 use std::path::PathBuf;
@@ -39,7 +41,7 @@ use std::path::PathBuf;
 pub use config::{
     preset_names, AxialNoise, DepthLag, DepthNoise, DisparityQuantisation, Holes, ImageConfig,
     LateralNoise, Misregistration, MovingObjects, Preset, Supersampling, SynthConfig,
-    SystematicDistortion, Trajectory,
+    SystematicDistortion, Trajectory, EFFECTS,
 };
 pub use contact::{contact_sheet, write_contact_sheet};
 pub use euroc::write_euroc;
