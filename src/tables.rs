@@ -169,10 +169,16 @@ pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag
     let mut rows = Vec::new();
     for seq in sequence_order(records, catalog) {
         let entry = catalog.get(&seq).ok();
-        let class = match entry.and_then(|e| e.class) {
-            Some(Class::Easy) => "easy",
-            Some(Class::Hard) => "hard",
-            None => "synthetic",
+        // A twin prints the paper's figures of the real sequence it imitates.
+        let imitated = entry
+            .and_then(|e| e.imitates.as_deref())
+            .and_then(|name| catalog.get(name).ok());
+        let class = match (entry.and_then(|e| e.class), imitated.and_then(|r| r.class)) {
+            (Some(Class::Easy), _) => "easy",
+            (Some(Class::Hard), _) => "hard",
+            (None, Some(Class::Easy)) => "twin of easy",
+            (None, Some(Class::Hard)) => "twin of hard",
+            (None, None) => "synthetic",
         };
         let mut row = vec![
             entry
@@ -193,7 +199,9 @@ pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag
         }
         if paper {
             for k in &kinds {
-                let p = entry.and_then(|e| e.paper.as_ref());
+                let p = entry
+                    .and_then(|e| e.paper.as_ref())
+                    .or_else(|| imitated.and_then(|r| r.paper.as_ref()));
                 row.push(match (p, k) {
                     (None, _) => "-".into(),
                     (Some(p), ConfigKind::Orb) => paper_text(p.orb_slam2),
@@ -468,4 +476,60 @@ pub fn threshold_grid(records: &[RunRecord], catalog: &Catalog) -> Option<Render
         &header,
         &rows,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::store::RunRecord;
+
+    fn record(sequence: &str, ate: f64) -> RunRecord {
+        RunRecord {
+            sequence: sequence.into(),
+            config: "orb".into(),
+            tau_mf: None,
+            tau_gf: None,
+            tau_mg: None,
+            baseline: None,
+            seed: 0,
+            ate_rmse: Some(ate),
+            failed: false,
+            frames: 700,
+            tracked: 700,
+            keyframes: 20,
+            map_points: 1500,
+            mean_inliers: 300.0,
+            mean_outliers: 100.0,
+            fps: 100.0,
+            wall_s: 7.0,
+            synth_seed: Some(0),
+            loops: Some(0),
+        }
+    }
+
+    /// A twin's row carries the paper's figure of the sequence it imitates; a plain preset's
+    /// has none.
+    #[test]
+    fn twins_print_the_paper_figures_of_the_sequence_they_imitate() {
+        let catalog = Catalog::embedded();
+        let records = [record("twin_fr1_360", 0.036), record("kinect", 0.001)];
+        let t = table3(&records, &catalog, true, 0);
+        let line = |name: &str| {
+            t.markdown
+                .lines()
+                .find(|l| l.starts_with(&format!("| {name} |")))
+                .unwrap_or_else(|| panic!("no row {name} in\n{}", t.markdown))
+                .to_string()
+        };
+        let twin = line("twin_fr1_360");
+        assert!(
+            twin.contains("twin of hard") && twin.contains("0.215"),
+            "{twin}"
+        );
+        let kinect = line("kinect");
+        assert!(
+            kinect.contains("synthetic") && !kinect.contains("0.215"),
+            "{kinect}"
+        );
+    }
 }

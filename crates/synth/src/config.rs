@@ -625,6 +625,7 @@ impl SynthConfig {
                         position_m: 0.0,
                         angle_rad: 0.0,
                     };
+                    spec.shake = None;
                     self.trajectory = Trajectory::HandHeld(Arc::new(HandHeldPath::new(spec)));
                 }
             }
