@@ -3,7 +3,7 @@
 //! command line's switches (`--mcor`, `--avc`, `--mapping-lag`, `--seed`).
 
 use anyhow::{Context, Result};
-use slam_core::system::{AvcParams, Config, McorParams};
+use slam_core::system::{AvcParams, ClusterViews, Config, McorParams, RigidConsensusParams};
 use slam_core::SensorKind;
 use std::path::Path;
 
@@ -114,15 +114,26 @@ pub struct Switches {
     pub mapping_lag: Option<u32>,
     /// Turn loop closing off (ablation; it is part of the ORB-SLAM2 baseline).
     pub no_loop_closing: bool,
+    /// MC-OR's cluster reading, overriding the file's (implies MC-OR on).
+    pub mcor_cluster: Option<ClusterViews>,
+    /// Turn on the rigid consensus (beyond the paper) with its defaults (unless the file
+    /// configured it).
+    pub rc: bool,
 }
 
 /// Applies the switches.
 pub fn apply_switches(mut config: Config, s: Switches) -> Config {
-    if s.mcor && config.mcor.is_none() {
+    if (s.mcor || s.mcor_cluster.is_some()) && config.mcor.is_none() {
         config.mcor = Some(McorParams::default());
+    }
+    if let (Some(v), Some(m)) = (s.mcor_cluster, config.mcor.as_mut()) {
+        m.cluster_views = v;
     }
     if s.avc && config.avc.is_none() {
         config.avc = Some(AvcParams::default());
+    }
+    if s.rc && config.rc.is_none() {
+        config.rc = Some(RigidConsensusParams::default());
     }
     if let Some(n) = s.mapping_lag {
         config.mapping_lag = n;
@@ -133,13 +144,28 @@ pub fn apply_switches(mut config: Config, s: Switches) -> Config {
     config
 }
 
-/// The configuration name of the paper's columns: `orb`, `mcor`, `avc` or `mcor+avc`.
+/// The configuration name of the tables' columns: `orb`, `mcor`, `avc` or `mcor+avc`, or
+/// `mcor-frames` / `mcor-frames+avc` for MC-OR's every-frame cluster reading.
 pub fn config_name(c: &Config) -> &'static str {
-    match (c.mcor.is_some(), c.avc.is_some()) {
-        (false, false) => "orb",
-        (true, false) => "mcor",
-        (false, true) => "avc",
-        (true, true) => "mcor+avc",
+    let frames = c
+        .mcor
+        .as_ref()
+        .is_some_and(|m| m.cluster_views == ClusterViews::EveryFrame);
+    if c.rc.is_some() {
+        return match (c.mcor.is_some(), c.avc.is_some()) {
+            (false, false) => "rc",
+            (false, true) => "rc+avc",
+            (true, false) => "rc+mcor",
+            (true, true) => "rc+mcor+avc",
+        };
+    }
+    match (c.mcor.is_some(), c.avc.is_some(), frames) {
+        (false, false, _) => "orb",
+        (true, false, false) => "mcor",
+        (false, true, _) => "avc",
+        (true, true, false) => "mcor+avc",
+        (true, false, true) => "mcor-frames",
+        (true, true, true) => "mcor-frames+avc",
     }
 }
 

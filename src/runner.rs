@@ -418,6 +418,8 @@ mod tests {
                 avc,
                 mapping_lag: Some(lag),
                 no_loop_closing: false,
+                mcor_cluster: None,
+                rc: false,
             };
             let mut cfg = apply_switches(base.clone(), switches);
             cfg.seed = 7;

@@ -153,7 +153,7 @@ fn paper_text(v: Option<datasets::Ate>) -> String {
 /// Table III: mean ATE RMSE (m) ± std over the runs, per sequence and configuration, at the
 /// default parameters; with `paper`, the published numbers beside ours.
 pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag: u32) -> Rendered {
-    let kinds: Vec<ConfigKind> = ConfigKind::ALL
+    let kinds: Vec<ConfigKind> = ConfigKind::EVERY
         .into_iter()
         .filter(|k| records.iter().any(|r| r.config == k.name()))
         .collect();
@@ -205,9 +205,12 @@ pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag
                 row.push(match (p, k) {
                     (None, _) => "-".into(),
                     (Some(p), ConfigKind::Orb) => paper_text(p.orb_slam2),
-                    (Some(p), ConfigKind::Mcor) => paper_text(p.mcor),
+                    (Some(p), ConfigKind::Mcor | ConfigKind::McorFrames) => paper_text(p.mcor),
                     (Some(p), ConfigKind::Avc) => paper_text(p.avc),
-                    (Some(p), ConfigKind::McorAvc) => paper_text(p.mcor_avc),
+                    (Some(p), ConfigKind::McorAvc | ConfigKind::McorFramesAvc) => {
+                        paper_text(p.mcor_avc)
+                    }
+                    (Some(_), ConfigKind::Rc) => "-".into(),
                 });
             }
         }
@@ -271,6 +274,9 @@ fn column_name(k: ConfigKind) -> &'static str {
         ConfigKind::Mcor => "w/ MC-OR",
         ConfigKind::Avc => "w/ AVC",
         ConfigKind::McorAvc => "w/ MC-OR+AVC",
+        ConfigKind::McorFrames => "w/ MC-OR (every frame)",
+        ConfigKind::McorFramesAvc => "w/ MC-OR (every frame)+AVC",
+        ConfigKind::Rc => "noisefree: rigid consensus",
     }
 }
 
@@ -325,7 +331,7 @@ pub fn table1(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {
 
 /// Table IV: mean frames per second per sequence and configuration (one thread).
 pub fn table4(records: &[RunRecord], catalog: &Catalog) -> Rendered {
-    let kinds: Vec<ConfigKind> = ConfigKind::ALL
+    let kinds: Vec<ConfigKind> = ConfigKind::EVERY
         .into_iter()
         .filter(|k| records.iter().any(|r| r.config == k.name()))
         .collect();
@@ -368,7 +374,7 @@ pub fn loops_table(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered>
     if !records.iter().any(|r| r.loops.is_some()) {
         return None;
     }
-    let kinds: Vec<ConfigKind> = ConfigKind::ALL
+    let kinds: Vec<ConfigKind> = ConfigKind::EVERY
         .into_iter()
         .filter(|k| records.iter().any(|r| r.config == k.name()))
         .collect();

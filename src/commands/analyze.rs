@@ -128,6 +128,8 @@ fn run_correlation(args: CorrelationArgs) -> Result<()> {
             avc: args.avc,
             mapping_lag: None,
             no_loop_closing: false,
+            mcor_cluster: None,
+            rc: false,
         },
     );
     let data = corr::collect(

@@ -10,7 +10,7 @@ use anyhow::{bail, Context, Result};
 use datasets::Sequence;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
-use slam_core::system::{AvcParams, Config, McorParams};
+use slam_core::system::{AvcParams, Config, McorParams, RigidConsensusParams};
 use std::path::PathBuf;
 
 /// Default relative change of the focal length per perturbed rerun: a change in the 12th
@@ -55,12 +55,16 @@ pub struct RegressArgs {
     pub quiet: bool,
 }
 
-/// The configuration of a case: the sensor's defaults with the paper's switches of its column.
+/// The configuration of a case: the sensor's defaults with the switches of its column.
 fn case_config(seq: &Sequence, case: &Case) -> Config {
     let mut c = base_config(seq.camera.sensor);
     c.seed = SUITE_SEED;
-    c.mcor = case.kind.mcor().then(McorParams::default);
+    c.mcor = case.kind.mcor().then(|| McorParams {
+        cluster_views: case.kind.cluster_views(),
+        ..McorParams::default()
+    });
     c.avc = case.kind.avc().then(AvcParams::default);
+    c.rc = case.kind.rc().then(RigidConsensusParams::default);
     c
 }
 

@@ -10,6 +10,7 @@ use ate_eval::io::{write_atomic, write_tum};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::json;
+use slam_core::system::ClusterViews;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `noisefree run`.
@@ -49,6 +50,16 @@ pub struct RunArgs {
     /// Turn on MC-OR (paper III-A) with its default thresholds (0.7, 0.7, 0.5 m).
     #[arg(long)]
     pub mcor: bool,
+    /// MC-OR's cluster (implies --mcor): `keyframes` (one feature per observing keyframe, the
+    /// default) or `every-frame` (every tracked frame that kept the point as an inlier adds its
+    /// feature: the paper's "tracked across N camera views").
+    #[arg(long = "mcor-cluster", value_name = "READING", value_parser = parse_cluster_views)]
+    pub mcor_cluster: Option<ClusterViews>,
+    /// Turn on noisefree's rigid consensus (beyond the paper): only the matches one rigid camera
+    /// motion explains enter pose optimization, and keypoints beside rejected ones on the same
+    /// body create no map points.
+    #[arg(long)]
+    pub rc: bool,
     /// Turn on AVC (paper III-B) with its default baseline (0.09 m).
     #[arg(long)]
     pub avc: bool,
@@ -183,6 +194,8 @@ pub fn run(args: RunArgs) -> Result<()> {
             avc: args.avc,
             mapping_lag: args.mapping_lag,
             no_loop_closing: args.no_loop_closing,
+            mcor_cluster: args.mcor_cluster,
+            rc: args.rc,
         },
     );
     let vocab_flag = match (&args.vocabulary, &args.config) {
@@ -298,4 +311,15 @@ pub fn run(args: RunArgs) -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// Parses `--mcor-cluster`.
+fn parse_cluster_views(s: &str) -> std::result::Result<ClusterViews, String> {
+    match s {
+        "keyframes" => Ok(ClusterViews::Keyframes),
+        "every-frame" => Ok(ClusterViews::EveryFrame),
+        other => Err(format!(
+            "unknown cluster reading {other:?}; expected keyframes or every-frame"
+        )),
+    }
 }

@@ -14,7 +14,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use slam_core::feature::OrbConfig;
 use slam_core::place::Vocabulary;
-use slam_core::system::Config;
+use slam_core::system::{ClusterViews, Config};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -167,8 +167,12 @@ pub fn job_config(base: &Config, job: &Job) -> Config {
         m.tau_mf = job.params.tau_mf.unwrap_or(m.tau_mf);
         m.tau_gf = job.params.tau_gf.unwrap_or(m.tau_gf);
         m.tau_mg = job.params.tau_mg.unwrap_or(m.tau_mg);
+        if job.kind.cluster_views() == ClusterViews::EveryFrame {
+            m.cluster_views = ClusterViews::EveryFrame;
+        }
         m
     });
+    c.rc = job.kind.rc().then(|| base.rc.clone().unwrap_or_default());
     c.avc = job.kind.avc().then(|| {
         let mut a = base.avc.clone().unwrap_or_default();
         a.baseline = job.params.baseline.unwrap_or(a.baseline);

@@ -2,9 +2,11 @@
 //! into shards for a cluster's job array.
 
 use anyhow::{bail, Context, Result};
+use slam_core::system::ClusterViews;
 use std::fmt;
 
-/// The paper's four columns of Table III.
+/// The paper's four columns of Table III, and the columns of MC-OR's every-frame cluster
+/// reading (`ClusterViews::EveryFrame`; `mcor` is the keyframe reading).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum ConfigKind {
     /// ORB-SLAM2 baseline (both techniques off).
@@ -15,6 +17,12 @@ pub enum ConfigKind {
     Avc,
     /// w/ MC-OR + AVC.
     McorAvc,
+    /// w/ MC-OR, clusters built from every frame that matched the point.
+    McorFrames,
+    /// w/ MC-OR (every-frame clusters) + AVC.
+    McorFramesAvc,
+    /// noisefree's rigid consensus (beyond the paper), neither MC-OR nor AVC.
+    Rc,
 }
 
 impl ConfigKind {
@@ -26,6 +34,17 @@ impl ConfigKind {
         ConfigKind::McorAvc,
     ];
 
+    /// Every kind, the paper's four first (the column order of the tables).
+    pub const EVERY: [ConfigKind; 7] = [
+        ConfigKind::Orb,
+        ConfigKind::Mcor,
+        ConfigKind::Avc,
+        ConfigKind::McorAvc,
+        ConfigKind::McorFrames,
+        ConfigKind::McorFramesAvc,
+        ConfigKind::Rc,
+    ];
+
     /// Command-line / CSV spelling.
     pub fn name(self) -> &'static str {
         match self {
@@ -33,6 +52,9 @@ impl ConfigKind {
             ConfigKind::Mcor => "mcor",
             ConfigKind::Avc => "avc",
             ConfigKind::McorAvc => "mcor+avc",
+            ConfigKind::McorFrames => "mcor-frames",
+            ConfigKind::McorFramesAvc => "mcor-frames+avc",
+            ConfigKind::Rc => "rc",
         }
     }
 
@@ -43,18 +65,46 @@ impl ConfigKind {
             "mcor" => ConfigKind::Mcor,
             "avc" => ConfigKind::Avc,
             "mcor+avc" | "avc+mcor" => ConfigKind::McorAvc,
-            other => bail!("unknown configuration {other:?}; expected orb, mcor, avc or mcor+avc"),
+            "mcor-frames" => ConfigKind::McorFrames,
+            "mcor-frames+avc" | "avc+mcor-frames" => ConfigKind::McorFramesAvc,
+            "rc" => ConfigKind::Rc,
+            other => bail!(
+                "unknown configuration {other:?}; expected orb, mcor, avc, mcor+avc, mcor-frames, \
+                 mcor-frames+avc or rc"
+            ),
         })
     }
 
     /// Whether MC-OR is on.
     pub fn mcor(self) -> bool {
-        matches!(self, ConfigKind::Mcor | ConfigKind::McorAvc)
+        matches!(
+            self,
+            ConfigKind::Mcor
+                | ConfigKind::McorAvc
+                | ConfigKind::McorFrames
+                | ConfigKind::McorFramesAvc
+        )
+    }
+
+    /// Whether the rigid consensus (beyond the paper) is on.
+    pub fn rc(self) -> bool {
+        self == ConfigKind::Rc
+    }
+
+    /// MC-OR's cluster reading of this kind (keyframes unless an every-frame kind).
+    pub fn cluster_views(self) -> ClusterViews {
+        match self {
+            ConfigKind::McorFrames | ConfigKind::McorFramesAvc => ClusterViews::EveryFrame,
+            _ => ClusterViews::Keyframes,
+        }
     }
 
     /// Whether AVC is on.
     pub fn avc(self) -> bool {
-        matches!(self, ConfigKind::Avc | ConfigKind::McorAvc)
+        matches!(
+            self,
+            ConfigKind::Avc | ConfigKind::McorAvc | ConfigKind::McorFramesAvc
+        )
     }
 }
 

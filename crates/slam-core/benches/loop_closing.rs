@@ -255,6 +255,7 @@ fn loop_closing(c: &mut Criterion) {
     let hooks = NoiseHooks {
         mcor: None,
         avc: None,
+        rc: None,
     };
     g.bench_function("global BA (10 iterations)", |b| {
         b.iter(|| global_bundle_adjustment(&mapped.map, &mapped.camera, &mapped.levels, &hooks, 10))

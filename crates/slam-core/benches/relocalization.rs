@@ -81,6 +81,7 @@ fn relocalization(c: &mut Criterion) {
             hooks: NoiseHooks {
                 mcor: None,
                 avc: None,
+                rc: None,
             },
             place,
         };

@@ -32,7 +32,9 @@ use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
 use crate::optimize::{BaConfig, PoseOptConfig};
 use crate::place::{PlaceRecognition, Vocabulary};
 
-pub use crate::module::noise::{AvcParams, McorParams};
+pub use crate::module::noise::{AvcParams, ClusterViews, McorParams};
+use crate::techniques::FrameView;
+pub use crate::techniques::RigidConsensusParams;
 
 /// serde mirror of [`OrbConfig`] (which does not derive serde itself).
 #[derive(Serialize, Deserialize)]
@@ -89,6 +91,9 @@ pub struct Config {
     pub mcor: Option<McorParams>,
     /// AVC (paper III-B) when set.
     pub avc: Option<AvcParams>,
+    /// Rigid consensus (noisefree's own, beyond the paper; see
+    /// [`crate::techniques::rigid_consensus`]) when set.
+    pub rc: Option<RigidConsensusParams>,
     /// Emulated local-mapping latency, frames (0 = synchronous, the paper's protocol). With
     /// N > 0 each new keyframe is mapped (triangulation, fusion, culling, local BA) only after
     /// a number of frames drawn uniformly from 0..=N with the run's RNG, in keyframe order;
@@ -112,6 +117,7 @@ impl Default for Config {
             init_min_depths: 50,
             mcor: None,
             avc: None,
+            rc: None,
             mapping_lag: 0,
         }
     }
@@ -257,6 +263,7 @@ fn mapping_context<'a>(
         hooks: NoiseHooks {
             mcor: config.mcor.as_ref(),
             avc: config.avc.as_ref(),
+            rc: None,
         },
     }
 }
@@ -527,6 +534,7 @@ impl System {
         let hooks = NoiseHooks {
             mcor: self.config.mcor.as_ref(),
             avc: self.config.avc.as_ref(),
+            rc: self.config.rc.as_ref(),
         };
         let ctx = TrackingContext {
             camera: &self.camera,
@@ -645,8 +653,46 @@ impl System {
                 });
             }
         }
+        if !stats.keyframe_inserted {
+            self.store_mcor_views(cur);
+        }
 
         cur.drop_outliers();
+    }
+
+    /// MC-OR's every-frame cluster reading: the tracked frame's inlier matches with depth join
+    /// their map points' clusters as frame views (a keyframe's own observations are in the
+    /// clusters already).
+    fn store_mcor_views(&mut self, cur: &TrackedFrame) {
+        let Some(params) = self.config.mcor.as_ref() else {
+            return;
+        };
+        if params.cluster_views != ClusterViews::EveryFrame {
+            return;
+        }
+        let (Some(tcw), Some(reference)) = (cur.tcw, cur.reference_kf) else {
+            return;
+        };
+        let Some(tkw) = self.map.keyframe_pose_any(reference) else {
+            return;
+        };
+        for i in 0..cur.len() {
+            let Some(id) = cur.map_points[i] else {
+                continue;
+            };
+            if cur.outliers[i] {
+                continue;
+            }
+            let Some(pc) = cur.features.unproject_camera(i, &self.camera) else {
+                continue;
+            };
+            let Some(view) = FrameView::new(cur.id, &tcw, reference, &tkw, pc) else {
+                continue;
+            };
+            if let Some(mp) = self.map.map_point_mut(id) {
+                mp.views.push(view);
+            }
+        }
     }
 
     /// Runs local mapping, then loop closing, for the waiting keyframes whose mapping has
@@ -730,6 +776,7 @@ impl System {
         let hooks = NoiseHooks {
             mcor: self.config.mcor.as_ref(),
             avc: self.config.avc.as_ref(),
+            rc: None,
         };
         let result = global_bundle_adjustment(
             &self.map,

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use crate::handheld::HandHeldPath;
 use crate::imaging::Imaging;
+use crate::people::Activity;
 use crate::recorded::RecordedPath;
 use crate::SynthError;
 
@@ -312,8 +313,11 @@ impl DepthNoise {
 pub struct MovingObjects {
     /// How many (1..=3; default 2).
     pub count: usize,
-    /// Walking speed multiplier (default 1; 1 is about 0.4-0.6 m/s).
+    /// Walking speed multiplier (default 1; 1 is about 0.4-0.6 m/s). Not used by bodies.
     pub speed: f64,
+    /// Articulated people doing this instead of the textured blocks (count 1..=2), with the
+    /// desk's chairs (default `None`: blocks, as the `walking` preset has always had).
+    pub bodies: Option<Activity>,
 }
 
 impl Default for MovingObjects {
@@ -321,6 +325,7 @@ impl Default for MovingObjects {
         MovingObjects {
             count: 2,
             speed: 1.0,
+            bodies: None,
         }
     }
 }
@@ -720,6 +725,9 @@ impl SynthConfig {
         if let Some(m) = &self.moving_objects {
             if !(1..=3).contains(&m.count) {
                 return bad("moving object count must be 1..=3");
+            }
+            if m.bodies.is_some() && m.count > crate::people::CHAIRS.len() {
+                return bad("at most 2 people (one chair each)");
             }
         }
         if let Some(l) = &self.depth_noise.lateral {

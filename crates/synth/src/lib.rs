@@ -5,6 +5,8 @@
 //! Module map:
 //! - [`config`]: `SynthConfig`, each noise component its own switch, and the named presets;
 //! - [`scene`], [`texture`]: the textured room, its objects and walking "people";
+//! - [`people`]: articulated people who walk, stop, turn, sit and get up (fr3 walking /
+//!   sitting twins);
 //! - [`trajectory`]: smooth `xyz`, `rpy`, `spin` and `loop` camera paths;
 //! - [`handheld`]: hand-held paths with a recorded sequence's duration and mean speeds;
 //! - [`recorded`]: recorded TUM trajectories levelled and placed in the room, interpolated;
@@ -27,6 +29,7 @@ pub mod handheld;
 pub mod hash;
 pub mod imaging;
 pub mod noise;
+pub mod people;
 pub mod recorded;
 pub mod render;
 pub mod scene;

@@ -11,6 +11,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::config::MovingObjects;
+use crate::people::{part_shapes, PartPose, Person, CHAIRS};
 use crate::texture::{Style, Texture};
 
 /// Half extents of the room along x and y, metres.
@@ -19,6 +20,8 @@ pub const ROOM_HALF: f64 = 2.5;
 pub const ROOM_HEIGHT: f64 = 2.7;
 /// Object id of the featureless occluder of the occlusion window.
 pub const OCCLUDER_ID: u16 = u16::MAX;
+/// Object ids of the chairs of scenes with people (static, after the fixed furniture).
+pub const CHAIR_ID_BASE: u16 = 900;
 /// Object ids at or above this (and below [`OCCLUDER_ID`]) are moving objects.
 pub const MOVING_ID_BASE: u16 = 1000;
 
@@ -70,6 +73,15 @@ pub struct Object {
     pub id: u16,
     /// Motion, for moving objects.
     pub walk: Option<Walk>,
+    /// A body part: (person, part) into `Scene::people` and [`crate::people::PARTS`].
+    pub body: Option<(usize, usize)>,
+}
+
+impl Object {
+    /// Whether the object moves (a walking block or a body part).
+    pub fn moves(&self) -> bool {
+        self.walk.is_some() || self.body.is_some()
+    }
 }
 
 /// An object placed at a given time: what the ray-caster intersects.
@@ -81,8 +93,35 @@ pub struct Placed {
     pub centre: Vector3<f64>,
     cos_yaw: f64,
     sin_yaw: f64,
+    /// Swing about the local y axis after the yaw (body parts; `None` for everything else,
+    /// whose rays then take exactly the arithmetic they always took).
+    pitch: Option<(f64, f64)>,
     /// Bounding-sphere radius.
     pub radius: f64,
+}
+
+impl Placed {
+    /// World offset `r` (from the centre) into the object's local frame.
+    #[inline]
+    fn world_to_local(&self, r: &Vector3<f64>) -> Vector3<f64> {
+        let (c, s) = (self.cos_yaw, self.sin_yaw);
+        let l = Vector3::new(c * r.x + s * r.y, -s * r.x + c * r.y, r.z);
+        match self.pitch {
+            None => l,
+            Some((cp, sp)) => Vector3::new(cp * l.x + sp * l.z, l.y, -sp * l.x + cp * l.z),
+        }
+    }
+
+    /// Local direction `n` back into the world.
+    #[inline]
+    fn local_to_world(&self, n: &Vector3<f64>) -> Vector3<f64> {
+        let n = match self.pitch {
+            None => *n,
+            Some((cp, sp)) => Vector3::new(cp * n.x - sp * n.z, n.y, sp * n.x + cp * n.z),
+        };
+        let (c, s) = (self.cos_yaw, self.sin_yaw);
+        Vector3::new(c * n.x - s * n.y, s * n.x + c * n.y, n.z)
+    }
 }
 
 /// Result of a ray hit.
@@ -109,6 +148,8 @@ pub struct Scene {
     pub textures: Vec<Texture>,
     /// Point light position (world, metres).
     pub light: Vector3<f64>,
+    /// Articulated people (their parts are objects with `body` set).
+    pub people: Vec<Person>,
 }
 
 fn cuboid(centre: [f64; 3], half: [f64; 3], yaw: f64) -> (Shape, [f64; 3], f64) {
@@ -157,6 +198,50 @@ impl Shape {
         }
     }
 }
+
+/// Margin added to a body part's bounding sphere, metres (a foot moves up to ~4 m/s, 3 cm
+/// between the renderer's bound samples).
+const BODY_BOUND_MARGIN: f64 = 0.05;
+
+/// The desk's chairs ([`crate::people::CHAIRS`]): a seat block and a backrest each, only in
+/// scenes with people (the other scenes keep their layout).
+fn add_chairs(objects: &mut Vec<Object>, textures: &mut Vec<Texture>, rng: &mut ChaCha8Rng) {
+    for (k, chair) in CHAIRS.iter().enumerate() {
+        let (cy, sy) = (chair.yaw.cos(), chair.yaw.sin());
+        let back = [chair.at[0] - 0.2 * cy, chair.at[1] - 0.2 * sy];
+        let parts = [
+            (
+                Shape::Cuboid {
+                    half: [0.21, 0.21, 0.225],
+                },
+                [chair.at[0], chair.at[1], 0.225],
+            ),
+            (
+                Shape::Cuboid {
+                    half: [0.025, 0.21, 0.26],
+                },
+                [back[0], back[1], 0.45 + 0.26],
+            ),
+        ];
+        for (j, (shape, centre)) in parts.into_iter().enumerate() {
+            let (tw, th) = shape.texture_size();
+            textures.push(Texture::collage(rng, tw, th, 0.0025, Style::Cloth));
+            objects.push(Object {
+                shape,
+                centre,
+                yaw: chair.yaw,
+                texture: textures.len() - 1,
+                id: CHAIR_ID_BASE + (2 * k + j) as u16,
+                walk: None,
+                body: None,
+            });
+        }
+    }
+}
+
+/// Index in [`static_layout`] of the first object standing on the floor (the ones before are
+/// the table and what stands on it).
+const FIRST_FLOOR_OBJECT: usize = 11;
 
 /// The fixed furniture of the room (shape, centre, yaw): a table with legs and things on it,
 /// a cabinet, boxes, a pillar, a shelf, a bin. The same for every seed (only textures vary).
@@ -236,9 +321,17 @@ impl Scene {
     pub fn new(seed: u64, moving: Option<&MovingObjects>) -> Scene {
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5CE4_E5EE_D000_0001);
         let h = ROOM_HALF;
+        // A scene with people is an office: plain walls with a few posters, carpet tiles,
+        // plain cabinets; only the desk and what stands on it keep the dense collage.
+        let office = moving.is_some_and(|m| m.bodies.is_some());
+        let (floor, ceiling, wall) = if office {
+            (Style::OfficeFloor, Style::OfficeFloor, Style::OfficeWall)
+        } else {
+            (Style::Carpet, Style::Poster, Style::Poster)
+        };
         let mut textures = vec![
-            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.004, Style::Carpet),
-            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.01, Style::Poster),
+            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.004, floor),
+            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.01, ceiling),
         ];
         for _ in 0..4 {
             textures.push(Texture::collage(
@@ -246,14 +339,19 @@ impl Scene {
                 2.0 * h,
                 ROOM_HEIGHT,
                 0.004,
-                Style::Poster,
+                wall,
             ));
         }
         let mut statics = static_layout();
         let mut objects = Vec::new();
         for (i, (shape, centre, yaw)) in statics.drain(..).enumerate() {
             let (tw, th) = shape.texture_size();
-            let style = if i == 0 { Style::Desk } else { Style::Poster };
+            let style = match i {
+                0 => Style::Desk,
+                // Cabinets, boxes, pillar and shelves on the floor.
+                i if office && i >= FIRST_FLOOR_OBJECT => Style::OfficeWall,
+                _ => Style::Poster,
+            };
             textures.push(Texture::collage(&mut rng, tw, th, 0.0025, style));
             objects.push(Object {
                 shape,
@@ -262,9 +360,33 @@ impl Scene {
                 texture: textures.len() - 1,
                 id: 10 + i as u16,
                 walk: None,
+                body: None,
             });
         }
-        if let Some(m) = moving {
+        let mut people = Vec::new();
+        if let Some(activity) = moving.and_then(|m| m.bodies) {
+            let count = moving.map_or(0, |m| m.count);
+            people = crate::people::people(seed, count, activity);
+            add_chairs(&mut objects, &mut textures, &mut rng);
+            let shapes = part_shapes();
+            for p in 0..people.len() {
+                // One texture each part, of the part's size: cloth, the head a face.
+                for (k, shape) in shapes.iter().enumerate() {
+                    let (tw, th) = shape.texture_size();
+                    let style = if k == 1 { Style::Head } else { Style::Cloth };
+                    textures.push(Texture::collage(&mut rng, tw, th, 0.0025, style));
+                    objects.push(Object {
+                        shape: *shape,
+                        centre: [0.0; 3],
+                        yaw: 0.0,
+                        texture: textures.len() - 1,
+                        id: MOVING_ID_BASE + (p * shapes.len() + k) as u16,
+                        walk: None,
+                        body: Some((p, k)),
+                    });
+                }
+            }
+        } else if let Some(m) = moving {
             let people = [
                 // In front of the table, crossing the view at about 1 m from the camera.
                 (
@@ -323,6 +445,7 @@ impl Scene {
                         period: walk.period / m.speed.max(1e-6),
                         ..*walk
                     }),
+                    body: None,
                 });
             }
         }
@@ -330,15 +453,30 @@ impl Scene {
             objects,
             textures,
             light: Vector3::new(0.3, 0.0, 2.6),
+            people,
         }
     }
 
     /// The objects placed at time `t` seconds.
     pub fn place(&self, t: f64) -> Vec<Placed> {
+        let bodies: Vec<[PartPose; 8]> = self.people.iter().map(|p| p.pose(t)).collect();
         self.objects
             .iter()
             .enumerate()
             .map(|(i, o)| {
+                if let Some((p, k)) = o.body {
+                    let q = bodies[p][k];
+                    return Placed {
+                        object: i,
+                        centre: q.centre,
+                        cos_yaw: q.yaw.cos(),
+                        sin_yaw: q.yaw.sin(),
+                        pitch: Some((q.pitch.cos(), q.pitch.sin())),
+                        // Limbs move fast: the margin keeps each part inside the bounds that
+                        // the renderer samples a few times per frame.
+                        radius: o.shape.bound() + BODY_BOUND_MARGIN,
+                    };
+                }
                 let mut c = Vector3::new(o.centre[0], o.centre[1], o.centre[2]);
                 if let Some(w) = &o.walk {
                     let a = std::f64::consts::TAU * t / w.period + w.phase;
@@ -352,6 +490,7 @@ impl Scene {
                     centre: c,
                     cos_yaw: o.yaw.cos(),
                     sin_yaw: o.yaw.sin(),
+                    pitch: None,
                     radius: o.shape.bound(),
                 }
             })
@@ -375,10 +514,9 @@ impl Scene {
                 continue;
             }
             let obj = &self.objects[p.object];
-            // Into the local frame: translate, then rotate by -yaw about z.
-            let (c, s) = (p.cos_yaw, p.sin_yaw);
-            let lo = Vector3::new(c * -oc.x + s * -oc.y, -s * -oc.x + c * -oc.y, -oc.z);
-            let ld = Vector3::new(c * d.x + s * d.y, -s * d.x + c * d.y, d.z);
+            // Into the local frame: translate, then rotate by -yaw about z (and -pitch).
+            let lo = p.world_to_local(&-oc);
+            let ld = p.world_to_local(d);
             let local = match obj.shape {
                 Shape::Cuboid { half } => hit_cuboid(&lo, &ld, &half),
                 Shape::Cylinder {
@@ -389,7 +527,7 @@ impl Scene {
             if let Some((t, n, st)) = local {
                 if t < best.t {
                     // Normal back to the world.
-                    let nw = Vector3::new(c * n.x - s * n.y, s * n.x + c * n.y, n.z);
+                    let nw = p.local_to_world(&n);
                     best = Hit {
                         t,
                         normal: nw,
@@ -415,9 +553,7 @@ impl Scene {
             .min(q.z.abs())
             .min((ROOM_HEIGHT - q.z).abs());
         for p in placed {
-            let r = q - p.centre;
-            let (c, s) = (p.cos_yaw, p.sin_yaw);
-            let l = Vector3::new(c * r.x + s * r.y, -s * r.x + c * r.y, r.z);
+            let l = p.world_to_local(&(q - p.centre));
             let sdf = shape_sdf(&self.objects[p.object].shape, &l);
             best = best.min(sdf.abs());
         }
@@ -588,7 +724,7 @@ mod tests {
         let b = scene.place(1.0);
         for (pa, pb) in a.iter().zip(&b) {
             let moved = (pa.centre - pb.centre).norm();
-            if scene.objects[pa.object].walk.is_some() {
+            if scene.objects[pa.object].moves() {
                 assert!(moved > 0.1);
             } else {
                 assert_eq!(moved, 0.0);

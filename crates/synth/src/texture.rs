@@ -18,6 +18,16 @@ pub enum Style {
     Carpet,
     /// Wood-like streaks with papers and text on top: the table.
     Desk,
+    /// An office wall or cabinet: a plain painted surface with faint shading and a few posters,
+    /// pictures and notes, as real offices have (most of a real wall gives ORB nothing).
+    OfficeWall,
+    /// Office carpet tiles: large, low-contrast.
+    OfficeFloor,
+    /// Clothing: a dyed cloth with shading folds, stripes on some, a print on some.
+    Cloth,
+    /// A head wrapped on a cylinder (u round it from behind, v up): skin, hair on top and at
+    /// the back, eyes and mouth at the front.
+    Head,
 }
 
 /// An RGB texture covering `width_m` x `height_m` metres of a surface.
@@ -50,6 +60,33 @@ fn random_colour(rng: &mut ChaCha8Rng) -> [u8; 3] {
     let amp = sat * lum.min(255.0 - lum).max(20.0);
     let c = |i: usize| (lum + amp * (hue[i] - hl)).clamp(0.0, 255.0) as u8;
     [c(0), c(1), c(2)]
+}
+
+/// Recursive random split of a rectangle into tiles between `min` and `max` metres wide.
+#[allow(clippy::too_many_arguments)]
+fn split_tiles(
+    rng: &mut ChaCha8Rng,
+    x: f64,
+    y: f64,
+    w: f64,
+    h: f64,
+    min: f64,
+    max: f64,
+    out: &mut Vec<(f64, f64, f64, f64)>,
+) {
+    let split_x = w > max || (w > 2.0 * min && rng.random_bool(0.5) && w >= h);
+    let split_y = h > max || (h > 2.0 * min && rng.random_bool(0.5));
+    if split_x && w > 2.0 * min {
+        let f = rng.random_range(0.3..0.7);
+        split_tiles(rng, x, y, w * f, h, min, max, out);
+        split_tiles(rng, x + w * f, y, w * (1.0 - f), h, min, max, out);
+    } else if split_y && h > 2.0 * min {
+        let f = rng.random_range(0.3..0.7);
+        split_tiles(rng, x, y, w, h * f, min, max, out);
+        split_tiles(rng, x, y + h * f, w, h * (1.0 - f), min, max, out);
+    } else {
+        out.push((x, y, w, h));
+    }
 }
 
 impl Texture {
@@ -99,8 +136,105 @@ impl Texture {
                 let scales = [(0.2, 0.3), (0.1, 0.25), (0.05, 0.2), (0.025, 0.1)];
                 t.scatter(rng, wm, hm, &scales, 0.25, texel_m);
             }
+            Style::OfficeWall => {
+                let paint = [rng.random_range(150.0..215.0), rng.random_range(0.0..0.25)];
+                t.shaded_patchwork(rng, wm, hm, (0.6, 2.0), paint, 6.0);
+                // Posters and pictures covering ~12 % of the surface, each framed.
+                let n = (0.12 * wm * hm / 0.3).ceil() as usize;
+                for _ in 0..n {
+                    let pw = rng.random_range(0.25..0.8f64).min(0.9 * wm);
+                    let ph = rng.random_range(0.25..0.8f64).min(0.9 * hm);
+                    let x0 = rng.random_range(0.0..(wm - pw).max(1e-3));
+                    let y0 = rng.random_range(0.0..(hm - ph).max(1e-3));
+                    let frame = random_colour(rng);
+                    t.fill_rect(x0 - 0.01, y0 - 0.01, x0 + pw + 0.01, y0 + ph + 0.01, frame);
+                    let poster = Texture::collage(rng, pw, ph, texel_m, Style::Poster);
+                    t.blit(&poster, x0, y0);
+                }
+                // A few notes.
+                t.scatter(rng, wm, hm, &[(0.2, 0.01)], 1.0, texel_m);
+            }
+            Style::OfficeFloor => {
+                let grey = [rng.random_range(70.0..130.0), rng.random_range(0.0..0.2)];
+                t.shaded_patchwork(rng, wm, hm, (0.5, 0.5), grey, 7.0);
+            }
+            Style::Cloth => {
+                let dye = [rng.random_range(40.0..200.0), rng.random_range(0.1..0.6)];
+                t.shaded_patchwork(rng, wm, hm, (0.04, 0.15), dye, 22.0);
+                if rng.random_bool(0.4) {
+                    // Stripes of a second colour.
+                    let c = random_colour(rng);
+                    let (w, gap) = (rng.random_range(0.01..0.03), rng.random_range(0.02..0.06));
+                    let mut y = 0.0;
+                    while y < hm {
+                        t.fill_rect(0.0, y, wm, y + w, c);
+                        y += w + gap;
+                    }
+                }
+                t.scatter(rng, wm, hm, &[(0.06, 0.04), (0.03, 0.03)], 0.0, texel_m);
+            }
+            Style::Head => {
+                let skin = [rng.random_range(120.0..200.0), rng.random_range(0.2..0.4)];
+                t.shaded_patchwork(rng, wm, hm, (0.03, 0.08), skin, 8.0);
+                let l = rng.random_range(20.0..90.0);
+                let hair = [l as u8, (l * 0.85) as u8, (l * 0.7) as u8];
+                let front = 0.5 * wm;
+                // Hair: the top third all round, down to the neck at the back.
+                t.fill_rect(0.0, 0.62 * hm, wm, hm, hair);
+                t.fill_rect(0.0, 0.0, 0.22 * wm, hm, hair);
+                t.fill_rect(0.78 * wm, 0.0, wm, hm, hair);
+                let dark = [40, 30, 30];
+                t.fill_disc(front - 0.03, 0.5 * hm, 0.008, dark);
+                t.fill_disc(front + 0.03, 0.5 * hm, 0.008, dark);
+                t.fill_rect(
+                    front - 0.025,
+                    0.22 * hm,
+                    front + 0.025,
+                    0.25 * hm,
+                    [120, 50, 50],
+                );
+            }
         }
         t
+    }
+
+    /// Tiles between `tile.0` and `tile.1` metres of one paint `[luminance, saturation]`,
+    /// each shaded by up to +-`contrast` grey levels: walls, carpet, cloth folds.
+    fn shaded_patchwork(
+        &mut self,
+        rng: &mut ChaCha8Rng,
+        wm: f64,
+        hm: f64,
+        tile: (f64, f64),
+        paint: [f64; 2],
+        contrast: f64,
+    ) {
+        let hue: [f64; 3] = [
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        ];
+        let hl = 0.299 * hue[0] + 0.587 * hue[1] + 0.114 * hue[2];
+        let mut tiles = Vec::new();
+        split_tiles(rng, 0.0, 0.0, wm, hm, tile.0, tile.1, &mut tiles);
+        for (x, y, w, h) in tiles {
+            let lum = paint[0] + rng.random_range(-contrast..=contrast);
+            let amp = paint[1] * lum.min(255.0 - lum).max(20.0);
+            let c = |i: usize| (lum + amp * (hue[i] - hl)).clamp(0.0, 255.0) as u8;
+            self.fill_rect(x, y, x + w, y + h, [c(0), c(1), c(2)]);
+        }
+    }
+
+    /// Copies `other` onto this texture with its corner at (`x0`, `y0`) metres (same texel
+    /// size; wraps).
+    fn blit(&mut self, other: &Texture, x0: f64, y0: f64) {
+        let ox = (x0 * self.scale).round() as i64;
+        let oy = (y0 * self.scale).round() as i64;
+        for j in 0..other.h {
+            for i in 0..other.w {
+                self.put(ox + i as i64, oy + j as i64, other.data[j * other.w + i]);
+            }
+        }
     }
 
     /// A texture of `width_m` x `height_m` metres at `texels_per_m`, texel (i, j) coloured
@@ -387,14 +521,12 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
 
-    #[test]
-    fn collage_has_contrast_everywhere() {
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let t = Texture::collage(&mut rng, 1.0, 1.0, 0.004, Style::Poster);
-        // Nearly every 10 cm x 10 cm patch has at least 60 grey levels of contrast.
+    /// How many of the 10 cm x 10 cm patches of a `side` m texture have more than 60 grey
+    /// levels of contrast.
+    fn rich_patches(t: &Texture, side: usize) -> usize {
         let mut rich = 0;
-        for by in 0..10 {
-            for bx in 0..10 {
+        for by in 0..side * 10 {
+            for bx in 0..side * 10 {
                 let (mut lo, mut hi) = (255.0f32, 0.0f32);
                 for j in 0..25 {
                     for i in 0..25 {
@@ -410,7 +542,34 @@ mod tests {
                 rich += (hi - lo > 60.0) as usize;
             }
         }
+        rich
+    }
+
+    #[test]
+    fn collage_has_contrast_everywhere() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let t = Texture::collage(&mut rng, 1.0, 1.0, 0.004, Style::Poster);
+        // Nearly every 10 cm x 10 cm patch has at least 60 grey levels of contrast.
+        let rich = rich_patches(&t, 1);
         assert!(rich >= 85, "{rich} of 100 patches have contrast");
+    }
+
+    #[test]
+    fn office_walls_and_floors_are_mostly_plain() {
+        for seed in 0..3 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let wall = Texture::collage(&mut rng, 3.0, 3.0, 0.004, Style::OfficeWall);
+            let rich = rich_patches(&wall, 3);
+            // Posters on ~12 % of the wall (their frames add a little): some structure, mostly
+            // plain paint.
+            assert!((20..=250).contains(&rich), "wall: {rich} of 900 patches");
+            let floor = Texture::collage(&mut rng, 3.0, 3.0, 0.004, Style::OfficeFloor);
+            assert_eq!(
+                rich_patches(&floor, 3),
+                0,
+                "carpet tiles differ by a few levels"
+            );
+        }
     }
 
     #[test]

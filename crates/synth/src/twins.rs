@@ -13,9 +13,10 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use slam_core::Camera;
 
-use crate::config::{DepthLag, DepthNoise, ImageConfig, SynthConfig, Trajectory};
+use crate::config::{DepthLag, DepthNoise, ImageConfig, MovingObjects, SynthConfig, Trajectory};
 use crate::handheld::{HandHeldPath, MotionSpec, Orbit, Region, Tremor};
 use crate::imaging::{AutoExposure, Exposure, Imaging, RollingShutter, SensorNoise, Vignetting};
+use crate::people::Activity;
 
 /// The TUM camera a twin uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,7 +45,8 @@ impl TumCamera {
 pub struct TwinSpec {
     /// Preset name (`twin_` + the catalog name of the real sequence).
     pub name: &'static str,
-    /// Catalog name of the real sequence (datasets.toml).
+    /// Short name of the real sequence: its catalog name (datasets.toml) for Table III's
+    /// sequences; `fr3_w_xyz` and `fr3_w_half` are not in Table III and not catalogued.
     pub imitates: &'static str,
     /// Camera.
     pub camera: TumCamera,
@@ -58,6 +60,8 @@ pub struct TwinSpec {
     pub character: &'static str,
     /// What the twin does not model of the real sequence.
     pub not_modelled: &'static str,
+    /// People in the scene (fr3 walking / sitting), or none.
+    pub people: Option<Activity>,
 }
 
 /// Everything the twins share that they do not model of real data.
@@ -66,7 +70,7 @@ pub const NOT_MODELLED_ANYWHERE: &str = "one fixed room layout (textures from th
     patterns; depth of the IR camera taken from the colour camera's viewpoint (registered)";
 
 /// The twins, in Table III order.
-pub const TWINS: [TwinSpec; 7] = [
+pub const TWINS: [TwinSpec; 13] = [
     TwinSpec {
         name: "twin_fr1_desk",
         imitates: "fr1_desk",
@@ -76,6 +80,7 @@ pub const TWINS: [TwinSpec; 7] = [
         mean_angular_deg: 23.327,
         character: "fast hand-held sweeps over an office desk at 0.6-1.2 m",
         not_modelled: "the real desk clutter (keyboards, monitors); two desks side by side",
+        people: None,
     },
     TwinSpec {
         name: "twin_fr1_xyz",
@@ -86,6 +91,7 @@ pub const TWINS: [TwinSpec; 7] = [
         mean_angular_deg: 8.920,
         character: "translation along the principal axes in front of a desk, little rotation",
         not_modelled: "the real motion is mostly along one axis at a time; ours mixes axes",
+        people: None,
     },
     TwinSpec {
         name: "twin_fr1_360",
@@ -96,6 +102,7 @@ pub const TWINS: [TwinSpec; 7] = [
         mean_angular_deg: 41.600,
         character: "a full turn about the vertical in the middle of the room, fast rotation",
         not_modelled: "the real room is larger (far walls beyond 4 m lose depth); ours is 5 x 5 m",
+        people: None,
     },
     TwinSpec {
         name: "twin_fr2_desk",
@@ -106,6 +113,7 @@ pub const TWINS: [TwinSpec; 7] = [
         mean_angular_deg: 6.338,
         character: "slow walk in front of a desk, looking at it from 1.5-2.3 m",
         not_modelled: "the real path is one loop round the desk; ours sways in front and beside it",
+        people: None,
     },
     TwinSpec {
         name: "twin_fr2_coke",
@@ -116,6 +124,7 @@ pub const TWINS: [TwinSpec; 7] = [
         mean_angular_deg: 20.0,
         character: "objects on a table seen at close range (0.5-0.9 m), turning round them",
         not_modelled: "the real coke bottle's specular, transparent surfaces",
+        people: None,
     },
     TwinSpec {
         name: "twin_fr3_office",
@@ -128,6 +137,7 @@ pub const TWINS: [TwinSpec; 7] = [
         not_modelled: "the real loop is one larger circuit; ours, in a 5 x 5 m room, goes round a \
             7.5 m ellipse almost three times, and so turns faster than the real one (12 deg/s \
             against 10.2)",
+        people: None,
     },
     TwinSpec {
         name: "twin_fr3_nst",
@@ -138,8 +148,83 @@ pub const TWINS: [TwinSpec; 7] = [
         mean_angular_deg: 7.430,
         character: "a textured floor seen from 1 m, no 3-D structure",
         not_modelled: "the real posters on the floor have larger, more distinctive texture",
+        people: None,
+    },
+    TwinSpec {
+        name: "twin_fr3_w_static",
+        imitates: "fr3_w_static",
+        camera: TumCamera::Fr3,
+        duration_s: 24.83,
+        mean_speed: 0.012,
+        mean_angular_deg: 1.388,
+        character: "a camera held still in front of a desk while two people walk, stop, turn, \
+            sit down and get up 0.9-2.2 m in front of it, at times covering much of the view",
+        not_modelled: WALKERS_NOT_MODELLED,
+        people: Some(Activity::Walking),
+    },
+    TwinSpec {
+        name: "twin_fr3_w_xyz",
+        imitates: "fr3_w_xyz",
+        camera: TumCamera::Fr3,
+        duration_s: 28.83,
+        mean_speed: 0.208,
+        mean_angular_deg: 5.490,
+        character: "the camera translates along its axes while two people walk in front of it",
+        not_modelled: WALKERS_NOT_MODELLED,
+        people: Some(Activity::Walking),
+    },
+    TwinSpec {
+        name: "twin_fr3_w_rpy",
+        imitates: "fr3_w_rpy",
+        camera: TumCamera::Fr3,
+        duration_s: 30.61,
+        mean_speed: 0.091,
+        mean_angular_deg: 20.903,
+        character: "the camera rolls, pitches and yaws on the spot while two people walk",
+        not_modelled: WALKERS_NOT_MODELLED,
+        people: Some(Activity::Walking),
+    },
+    TwinSpec {
+        name: "twin_fr3_w_half",
+        imitates: "fr3_w_half",
+        camera: TumCamera::Fr3,
+        duration_s: 35.81,
+        mean_speed: 0.221,
+        mean_angular_deg: 18.267,
+        character: "the camera moves over a half sphere looking at the desk while two people walk",
+        not_modelled: WALKERS_NOT_MODELLED,
+        people: Some(Activity::Walking),
+    },
+    TwinSpec {
+        name: "twin_fr3_s_static",
+        imitates: "fr3_s_static",
+        camera: TumCamera::Fr3,
+        duration_s: 23.63,
+        mean_speed: 0.011,
+        mean_angular_deg: 1.699,
+        character: "a camera held still in front of a desk at which two people sit, talk and \
+            gesture",
+        not_modelled: WALKERS_NOT_MODELLED,
+        people: Some(Activity::Sitting),
+    },
+    TwinSpec {
+        name: "twin_fr3_s_xyz",
+        imitates: "fr3_s_xyz",
+        camera: TumCamera::Fr3,
+        duration_s: 42.50,
+        mean_speed: 0.132,
+        mean_angular_deg: 3.562,
+        character: "the camera translates along its axes in front of two seated people",
+        not_modelled: WALKERS_NOT_MODELLED,
+        people: Some(Activity::Sitting),
     },
 ];
+
+/// What the people twins do not model of fr3's walking and sitting sequences.
+pub const WALKERS_NOT_MODELLED: &str = "people are rigid primitives (no clothes that fold, no \
+    hands or faces); they walk through each other if their paths cross; the real office is \
+    larger, with the desk in the middle; the published mean speeds are the TUM page's (not \
+    checked offline)";
 
 /// The twin called `name`.
 pub fn twin(name: &str) -> Option<&'static TwinSpec> {
@@ -220,6 +305,27 @@ fn motion(t: &TwinSpec) -> MotionSpec {
                 r([0.3, -0.9, 0.0], [0.5, 0.35, 0.0]),
             )
         },
+        // The fr3 people twins: a camera in front of the desk (people 0.9-2.2 m away, the
+        // desk 2.4-3.2 m, the back wall 4.2 m).
+        "twin_fr3_w_static" | "twin_fr3_s_static" => base(
+            r([0.0, -1.75, 1.35], [0.03, 0.03, 0.02]),
+            r([0.0, 0.6, 0.85], [0.05, 0.05, 0.03]),
+        ),
+        "twin_fr3_w_xyz" | "twin_fr3_s_xyz" => MotionSpec {
+            track_target: false,
+            ..base(
+                r([0.0, -1.7, 1.35], [0.35, 0.15, 0.2]),
+                r([0.0, 0.6, 0.85], [0.1, 0.05, 0.05]),
+            )
+        },
+        "twin_fr3_w_rpy" => base(
+            r([0.0, -1.75, 1.35], [0.06, 0.05, 0.04]),
+            r([0.0, 0.8, 0.95], [1.1, 0.2, 0.45]),
+        ),
+        "twin_fr3_w_half" => base(
+            r([0.0, -1.6, 1.35], [0.55, 0.2, 0.3]),
+            r([0.0, 0.3, 0.8], [0.3, 0.2, 0.1]),
+        ),
         _ => unreachable!("every twin has a motion"),
     }
 }
@@ -289,7 +395,11 @@ pub fn config(t: &TwinSpec) -> SynthConfig {
         image: ImageConfig::default(),
         imaging,
         depth_noise,
-        moving_objects: None,
+        moving_objects: t.people.map(|activity| MovingObjects {
+            count: 2,
+            speed: 1.0,
+            bodies: Some(activity),
+        }),
         occlusion: None,
     }
 }

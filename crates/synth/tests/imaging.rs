@@ -39,6 +39,7 @@ fn edge_room() -> Scene {
         objects: Vec::new(),
         textures,
         light: Vector3::new(0.0, 0.0, 2.6),
+        people: Vec::new(),
     }
 }
 

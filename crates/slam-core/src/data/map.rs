@@ -191,12 +191,17 @@ impl Map {
         if old == new || self.map_points[old.index()].bad || self.map_points[new.index()].bad {
             return;
         }
-        let (obs, found, visible) = {
+        let (obs, found, visible, views) = {
             let m = &mut self.map_points[old.index()];
             m.bad = true;
             m.replaced_by = Some(new);
             m.n_obs = 0;
-            (std::mem::take(&mut m.observations), m.n_found, m.n_visible)
+            (
+                std::mem::take(&mut m.observations),
+                m.n_found,
+                m.n_visible,
+                std::mem::take(&mut m.views),
+            )
         };
         self.n_good_map_points -= 1;
         for (kf, idx) in obs {
@@ -212,6 +217,9 @@ impl Map {
         let m = &mut self.map_points[new.index()];
         m.n_found += found;
         m.n_visible += visible;
+        if !views.is_empty() {
+            m.views.merge(&views);
+        }
         self.compute_distinctive_descriptor(new);
     }
 

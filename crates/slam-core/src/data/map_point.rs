@@ -8,6 +8,7 @@ use nalgebra::Vector3;
 
 use super::{KeyFrameId, MapPointId, ScaleLevels};
 use crate::feature::Descriptor;
+use crate::techniques::FrameViews;
 
 /// A 3-D landmark. Observations map each observing keyframe to the keypoint index in it.
 #[derive(Clone, Debug)]
@@ -48,6 +49,9 @@ pub struct MapPoint {
     pub fuse_candidate_for_kf: u32,
     /// Local-mapping marker: id + 1 of the keyframe whose local BA last included this point.
     pub ba_local_for_kf: u32,
+    /// MC-OR's frame views of the point (only stored under
+    /// [`crate::module::noise::ClusterViews::EveryFrame`]; empty otherwise).
+    pub views: FrameViews,
 }
 
 impl MapPoint {
@@ -77,6 +81,7 @@ impl MapPoint {
             last_frame_seen: 0,
             fuse_candidate_for_kf: 0,
             ba_local_for_kf: 0,
+            views: FrameViews::default(),
         }
     }
 

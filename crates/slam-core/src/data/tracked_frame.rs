@@ -26,6 +26,9 @@ pub struct TrackedFrame {
     pub outliers: Vec<bool>,
     /// Reference keyframe (the one sharing most map points, set by local-map tracking).
     pub reference_kf: Option<KeyFrameId>,
+    /// Per keypoint: on a moving body according to the rigid consensus (beyond the paper;
+    /// empty when it is off). Such keypoints create no map points at keyframe insertion.
+    pub dynamic: Vec<bool>,
     /// BoW vector and direct index, once computed (only with a vocabulary, and only when
     /// reference tracking, relocalization or a new keyframe needs them).
     pub bow: Option<Arc<crate::place::FrameBow>>,
@@ -50,6 +53,7 @@ impl TrackedFrame {
             map_points: vec![None; n],
             outliers: vec![false; n],
             reference_kf: None,
+            dynamic: Vec::new(),
             bow: None,
         }
     }

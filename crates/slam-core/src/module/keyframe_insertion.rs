@@ -39,7 +39,7 @@ pub fn create_keyframe(
         let create = match frame.map_points[i] {
             None => true,
             Some(id) => map.map_point(id).is_none_or(|m| m.n_obs < 1),
-        };
+        } && !frame.dynamic.get(i).copied().unwrap_or(false);
         if create {
             let kp = &frame.features.keypoints[i];
             let pc = camera.unproject(kp.x as f64, kp.y as f64, z);

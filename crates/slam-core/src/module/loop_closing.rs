@@ -293,6 +293,7 @@ pub fn verify_loop(
     let no_hooks = NoiseHooks {
         mcor: None,
         avc: None,
+        rc: None,
     };
     for &c in candidates {
         let Some(lk) = map.keyframe(c) else {

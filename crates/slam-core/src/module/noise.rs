@@ -22,6 +22,35 @@ pub struct McorParams {
     /// depth of the cluster's features), making the thresholds fractions of depth (e.g. 0.1 =
     /// 10 %); a variant the paper does not use (default false: metres, as the paper).
     pub depth_normalised: bool,
+    /// Which camera views build a map point's cluster: its keyframes' observations only, or
+    /// every frame that matched it (the paper's "tracked across N camera views"; see
+    /// [`ClusterViews`]). Default: keyframes.
+    pub cluster_views: ClusterViews,
+}
+
+/// The two readings of the paper's cluster (III-A): "a landmark ... tracked across N camera
+/// views", with "a moving centroid G ... updated after every camera viewpoint".
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ClusterViews {
+    /// The cluster holds one feature per observing keyframe, placed with the keyframe's current
+    /// pose (derived from the map at every gate; nothing is stored).
+    #[default]
+    Keyframes,
+    /// Every tracked frame that kept a match of the point as an inlier adds its 3-D feature
+    /// (stored on the map point relative to the frame's reference keyframe, so it follows
+    /// bundle adjustment and loop correction), on top of the keyframe observations.
+    EveryFrame,
+}
+
+impl ClusterViews {
+    /// The spelling of the command line and the config TOML.
+    pub fn name(self) -> &'static str {
+        match self {
+            ClusterViews::Keyframes => "keyframes",
+            ClusterViews::EveryFrame => "every-frame",
+        }
+    }
 }
 
 impl Default for McorParams {
@@ -31,6 +60,7 @@ impl Default for McorParams {
             tau_gf: 0.7,
             tau_mg: 0.5,
             depth_normalised: false,
+            cluster_views: ClusterViews::Keyframes,
         }
     }
 }

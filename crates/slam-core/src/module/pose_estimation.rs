@@ -23,11 +23,12 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use super::noise::{AvcParams, McorParams};
+use super::noise::{AvcParams, ClusterViews, McorParams};
 use crate::camera::Camera;
 use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
 use crate::optimize::{pose_optimization_with, Measurement, PoseObservation, PoseOptConfig};
+use crate::techniques::rigid_consensus::{rigid_consensus, ConsensusMatch, RigidConsensusParams};
 use crate::techniques::{
     mcor_gate, ClusterFeature, McorCluster, McorMatch, McorOutcome, McorVerdict,
     VirtualCameraResidual,
@@ -51,6 +52,8 @@ pub struct NoiseHooks<'a> {
     pub mcor: Option<&'a McorParams>,
     /// AVC parameters when on.
     pub avc: Option<&'a AvcParams>,
+    /// Rigid consensus (beyond the paper) when on: gates pose-only optimization.
+    pub rc: Option<&'a RigidConsensusParams>,
 }
 
 /// The measurement of keypoint `i` (hook point 1). Baseline: stereo / RGB-D keypoints with a
@@ -105,8 +108,16 @@ fn avc_residual_for(
 
 /// The MC-OR cluster of map point `mp`: every observing (good) keyframe's keypoint with a
 /// measured depth, back-projected and placed with the keyframe's current pose, in keyframe-id
-/// order (so the ring keeps the most recent keyframes).
-pub fn map_point_cluster(map: &Map, mp: crate::data::MapPointId, camera: &Camera) -> McorCluster {
+/// order (so the ring keeps the most recent keyframes); under
+/// [`ClusterViews::EveryFrame`] followed by the point's stored frame views (oldest first, each
+/// placed through its reference keyframe's current pose), so the ring keeps the most recent
+/// views.
+pub fn map_point_cluster(
+    map: &Map,
+    mp: crate::data::MapPointId,
+    camera: &Camera,
+    views: ClusterViews,
+) -> McorCluster {
     let mut cluster = McorCluster::new();
     let Some(m) = map.map_point(mp) else {
         return cluster;
@@ -121,6 +132,10 @@ pub fn map_point_cluster(map: &Map, mp: crate::data::MapPointId, camera: &Camera
         if let Some(f) = ClusterFeature::new(kf.0 as u64, pc, &k.tcw.inverse()) {
             cluster.push(f);
         }
+    }
+    if views == ClusterViews::EveryFrame {
+        m.views
+            .extend_cluster(&mut cluster, |kf| map.keyframe_pose_any(kf));
     }
     cluster
 }
@@ -146,7 +161,7 @@ pub fn mcor_frame_gate(
             continue;
         };
         index.push(i);
-        clusters.push(map_point_cluster(map, id, camera));
+        clusters.push(map_point_cluster(map, id, camera, params.cluster_views));
         positions.push(mp.position);
     }
     let matches: Vec<McorMatch> = index
@@ -160,6 +175,40 @@ pub fn mcor_frame_gate(
         .collect();
     let outcome = mcor_gate(params, &tcw.inverse(), &matches);
     (index, outcome)
+}
+
+/// Keypoints on the same moving body as a match the rigid consensus rejected: within
+/// `mask_radius_px` of a rejected keypoint with depth and within `mask_depth_m` of its depth.
+/// They create no map points when the frame becomes a keyframe.
+fn dynamic_mask(
+    frame: &TrackedFrame,
+    params: &RigidConsensusParams,
+    index: &[usize],
+    outlier: &[bool],
+) -> Vec<bool> {
+    let f = &frame.features;
+    let seeds: Vec<(f32, f32, f64)> = index
+        .iter()
+        .zip(outlier)
+        .filter(|(_, &o)| o)
+        .filter_map(|(&i, _)| {
+            let kp = &f.keypoints[i];
+            f.depth_of(i).map(|d| (kp.x, kp.y, d))
+        })
+        .collect();
+    let r2 = (params.mask_radius_px * params.mask_radius_px) as f32;
+    (0..f.len())
+        .map(|i| {
+            let kp = &f.keypoints[i];
+            let Some(d) = f.depth_of(i) else {
+                return false;
+            };
+            seeds.iter().any(|&(x, y, ds)| {
+                let (dx, dy) = (kp.x - x, kp.y - y);
+                dx * dx + dy * dy <= r2 && (d - ds).abs() <= params.mask_depth_m
+            })
+        })
+        .collect()
 }
 
 /// Outcome of one pose optimization of a frame.
@@ -330,11 +379,48 @@ pub fn optimize_frame_pose(
             ..PoseOptCounts::default()
         };
     }
+    // Rigid consensus (beyond the paper): the matches one rigid camera motion explains, found
+    // around the initial pose; the rest stay out of every round, and the optimization starts
+    // from the consensus pose.
+    let mut initial = initial;
+    let rc_outlier: Option<Vec<bool>> = hooks.rc.and_then(|params| {
+        frame.dynamic.clear();
+        let matches: Vec<ConsensusMatch> = index
+            .iter()
+            .zip(&obs)
+            .map(|(&i, o)| {
+                let m = map.map_point(frame.map_points[i].expect("matched"));
+                let estimate = (initial * Point3::from(o.point_world)).coords;
+                ConsensusMatch {
+                    map_point: o.point_world,
+                    point_camera: frame.features.unproject_camera(i, camera),
+                    measurement: measurement_for(
+                        camera,
+                        &frame.features,
+                        i,
+                        &NoiseHooks::default(),
+                        &estimate,
+                    ),
+                    inv_sigma2: o.inv_sigma2,
+                    keyframes: m.map_or(0, |m| m.observations.len() as u32),
+                }
+            })
+            .collect();
+        let key = frame.id.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ obs.len() as u64;
+        let c = rigid_consensus(camera, params, &initial, &matches, key)?;
+        initial = c.tcw;
+        let outlier: Vec<bool> = c.inlier.iter().map(|&i| !i).collect();
+        frame.dynamic = dynamic_mask(frame, params, &index, &outlier);
+        Some(outlier)
+    });
     // MC-OR clusters (keyframe poses are fixed during this call) and the current features.
     let clusters: Vec<McorCluster> = match hooks.mcor {
-        Some(_) => index
+        Some(params) => index
             .iter()
-            .map(|&i| map_point_cluster(map, frame.map_points[i].expect("matched"), camera))
+            .map(|&i| {
+                let mp = frame.map_points[i].expect("matched");
+                map_point_cluster(map, mp, camera, params.cluster_views)
+            })
             .collect(),
         None => Vec::new(),
     };
@@ -350,6 +436,9 @@ pub fn optimize_frame_pose(
     let mut gate = |_round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
         for (k, r) in &avc {
             r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
+        }
+        if let Some(out) = &rc_outlier {
+            excluded.copy_from_slice(out);
         }
         if let Some(params) = hooks.mcor {
             let matches: Vec<McorMatch> = clusters
@@ -406,7 +495,7 @@ pub fn optimize_frame_pose(
 mod tests {
     use super::*;
     use crate::feature::KeyPoint;
-    use crate::techniques::McorVerdict;
+    use crate::techniques::{FrameView, McorVerdict};
     use nalgebra::{Translation3, UnitQuaternion};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -461,6 +550,14 @@ mod tests {
     /// A map of 3 keyframes observing 120 points, and the current frame (camera 3) matched to
     /// all of them; points `gross` have a depth reading 1.5 m too far in the current frame.
     fn scene(gross: &[usize]) -> (Camera, Map, TrackedFrame, Vec<Vector3<f64>>) {
+        let gross = gross.to_vec();
+        scene_with(move |k| if gross.contains(&k) { 1.5 } else { 0.0 })
+    }
+
+    /// [`scene`] with `depth_error(k)` metres on the current frame's depth of point `k`.
+    fn scene_with(
+        depth_error: impl Fn(usize) -> f64,
+    ) -> (Camera, Map, TrackedFrame, Vec<Vector3<f64>>) {
         let camera = Camera::tum_fr3();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let points: Vec<Vector3<f64>> = (0..120)
@@ -486,15 +583,7 @@ mod tests {
                 map.add_observation(mp, kf, i);
             }
         }
-        let gross = gross.to_vec();
-        let f = features(
-            &camera,
-            &points,
-            &twc(3),
-            |k| if gross.contains(&k) { 1.5 } else { 0.0 },
-            0.3,
-            &mut rng,
-        );
+        let f = features(&camera, &points, &twc(3), depth_error, 0.3, &mut rng);
         let mut frame = TrackedFrame::new(3, 3.0, f);
         for i in 0..points.len() {
             frame.map_points[i] = map.map_points().nth(i).map(|m| m.id);
@@ -519,6 +608,7 @@ mod tests {
         let hooks = NoiseHooks {
             mcor: Some(&params),
             avc: None,
+            rc: None,
         };
         let levels = ScaleLevels::new(8, 1.2);
         let counts = optimize_frame_pose(
@@ -564,8 +654,60 @@ mod tests {
             (1, 0)
         );
         // A cluster holds one feature per observing keyframe with depth.
-        let cluster = map_point_cluster(&map, frame.map_points[0].unwrap(), &camera);
+        let cluster = map_point_cluster(
+            &map,
+            frame.map_points[0].unwrap(),
+            &camera,
+            ClusterViews::Keyframes,
+        );
         assert_eq!(cluster.len(), 3);
+    }
+
+    #[test]
+    fn every_frame_clusters_reject_a_point_that_moved_and_stayed_where_keyframes_did_not() {
+        // Point 10 moved 0.6 m (along the current ray) after the keyframes saw it, and 20
+        // tracked frames since have seen it at its new place: a person who walked and stopped.
+        let (camera, mut map, frame, _) = scene_with(|k| if k == 10 { 0.6 } else { 0.0 });
+        let id = frame.map_points[10].unwrap();
+        let moved = frame.features.unproject_camera(10, &camera).unwrap();
+        let kf2 = map.keyframes().nth(2).unwrap().id;
+        let tkw = twc(2).inverse();
+        for f in 10..30 {
+            let view = FrameView::new(f, &twc(3).inverse(), kf2, &tkw, moved).unwrap();
+            map.map_point_mut(id).unwrap().views.push(view);
+        }
+        let gate = |views| {
+            let params = McorParams {
+                cluster_views: views,
+                ..McorParams::default()
+            };
+            mcor_frame_gate(&frame, &map, &camera, &params, &twc(3).inverse()).1
+        };
+        // Keyframes alone: M, G and the current feature are close enough (0.6 m < tau_MF 0.7,
+        // |M - G| 0.15 m < tau_MG 0.5): the moved point passes as static.
+        let kf = gate(ClusterViews::Keyframes);
+        assert_eq!(kf.verdicts[10], McorVerdict::Kept);
+        assert_eq!(kf.n_kept(), 120);
+        // Every frame: G follows the 20 views to 0.52 m from M, beyond tau_MG.
+        let every = gate(ClusterViews::EveryFrame);
+        assert_eq!(every.verdicts[10], McorVerdict::RejectedCluster);
+        assert_eq!(
+            (every.n_rejected_clusters, every.n_rejected_features),
+            (1, 0)
+        );
+        let cluster = map_point_cluster(&map, id, &camera, ClusterViews::EveryFrame);
+        assert_eq!(cluster.total_count(), 3 + 20);
+        let m = map.map_point(id).unwrap().position;
+        let g = cluster.centroid().unwrap();
+        // G: 3 keyframe features at M (up to pixel noise), 20 views where the point moved.
+        let d = ((twc(3) * Point3::from(moved)).coords - m).norm();
+        assert!(d > 0.6 && d < 0.7, "{d}");
+        let expected = 20.0 * d / 23.0;
+        assert!(
+            ((m - g).norm() - expected).abs() < 0.005,
+            "{}",
+            (m - g).norm()
+        );
     }
 
     #[test]
@@ -576,6 +718,7 @@ mod tests {
         let hooks = NoiseHooks {
             mcor: None,
             avc: Some(&avc),
+            rc: None,
         };
         let estimate = (start_pose() * Point3::from(points[0])).coords;
         let m = measurement_for(&camera, &frame.features, 0, &hooks, &estimate);
@@ -610,6 +753,7 @@ mod tests {
         let hooks = NoiseHooks {
             mcor: Some(&params),
             avc: None,
+            rc: None,
         };
         let levels = ScaleLevels::new(8, 1.2);
         let cfg = PoseOptConfig::default();

@@ -80,6 +80,16 @@ impl ClusterFeature {
         })
     }
 
+    /// A feature already placed in the world at `point_world` (e.g. a stored frame view moved
+    /// with its reference keyframe); `point_camera` is its observer's back-projection.
+    pub fn placed(source: u64, point_camera: Vector3<f64>, point_world: Vector3<f64>) -> Self {
+        ClusterFeature {
+            source,
+            point_camera,
+            point_world,
+        }
+    }
+
     /// Who observed it (keyframe id, or [`CURRENT_FRAME_SOURCE`]).
     pub fn source(&self) -> u64 {
         self.source
@@ -177,6 +187,25 @@ impl McorCluster {
             }
         }
         self.recent.push_back(feature);
+    }
+
+    /// Adds a feature whose `source` the caller knows is not in the ring (no search); when the
+    /// ring is full, its oldest feature is folded into the running sum.
+    pub fn push_distinct(&mut self, feature: ClusterFeature) {
+        if self.recent.len() == MCOR_CLUSTER_CAPACITY {
+            if let Some(old) = self.recent.pop_front() {
+                self.folded_sum += old.point_world;
+                self.folded_count += 1;
+            }
+        }
+        self.recent.push_back(feature);
+    }
+
+    /// Adds `count` features already folded elsewhere, whose world positions sum to `sum`: they
+    /// count in G (Eq. 1) but not in the FL / CL means.
+    pub fn add_folded(&mut self, sum: Vector3<f64>, count: u64) {
+        self.folded_sum += sum;
+        self.folded_count += count;
     }
 
     /// Removes the ring feature of `source` (an observation erased from the map); `false` when
@@ -526,6 +555,7 @@ mod tests {
             tau_gf: 0.02,
             tau_mg: 0.02,
             depth_normalised: true,
+            ..McorParams::default()
         };
         assert_eq!(mcor_gate(&tight, &observer(9), &matches).n_kept(), 1);
     }
@@ -684,6 +714,7 @@ mod tests {
             tau_gf: 0.1,
             tau_mg: 0.1,
             depth_normalised: true,
+            ..McorParams::default()
         };
         let mut verdicts = Vec::new();
         for z in [1.0, 6.0] {

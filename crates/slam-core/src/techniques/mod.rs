@@ -3,8 +3,12 @@
 //! - [`mcor`]: Map-point Consensus based Outlier Rejection (III-A, Algorithm 1) — per-map-point
 //!   clusters of back-projected observations, FL / CL metrics and the hierarchical gate run
 //!   before every pose-optimization round;
+//! - [`mcor_views`]: the every-frame reading of MC-OR's cluster (frame views stored on map
+//!   points);
 //! - [`avc`]: the Adaptive Virtual Camera residual (III-B, Eq. 8-12), a 4-D
 //!   [`crate::optimize::CameraResidual`] for pose-only optimization and bundle adjustment;
+//! - [`rigid_consensus`]: noisefree's own gate beyond the paper, the largest set of matches
+//!   one rigid camera motion explains (RANSAC over 3-D-3-D matches);
 //! - [`correlation`]: the error terms and Pearson correlations of Table II.
 //!
 //! The system switches them on through `Config::mcor` / `Config::avc`
@@ -13,6 +17,8 @@
 pub mod avc;
 pub mod correlation;
 pub mod mcor;
+pub mod mcor_views;
+pub mod rigid_consensus;
 #[cfg(test)]
 mod test_support;
 
@@ -23,3 +29,5 @@ pub use mcor::{
     FeatureMetrics, McorCluster, McorMatch, McorMetrics, McorOutcome, McorSelection, McorVerdict,
     MCOR_CLUSTER_CAPACITY,
 };
+pub use mcor_views::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
+pub use rigid_consensus::{rigid_consensus, Consensus, ConsensusMatch, RigidConsensusParams};

@@ -1,0 +1,212 @@
+//! The every-frame reading of MC-OR's cluster (paper III-A: a landmark "tracked across N camera
+//! views", its centroid G "updated after every camera viewpoint").
+//!
+//! With [`crate::module::noise::ClusterViews::EveryFrame`], every tracked frame that keeps a
+//! match of a map point as an inlier (and is not made a keyframe: a keyframe's observation is in
+//! the cluster already) stores its 3-D feature on the point. A view is kept relative to the
+//! frame's reference keyframe, so when bundle adjustment or a loop correction moves that
+//! keyframe the view moves with it, as keyframe observations do. Memory is bounded as
+//! [`McorCluster`]'s: the [`MCOR_CLUSTER_CAPACITY`] most recent views individually, older ones
+//! folded into a running world sum (placed where they were when folded).
+
+use std::collections::VecDeque;
+
+use nalgebra::{Isometry3, Point3, Vector3};
+
+use super::mcor::{ClusterFeature, McorCluster, MCOR_CLUSTER_CAPACITY};
+use crate::data::KeyFrameId;
+
+/// Tag of a frame view's `source` in a cluster (keyframe ids and the current frame's tag never
+/// carry this bit), so views never collide with keyframe observations.
+pub const FRAME_VIEW_SOURCE_BIT: u64 = 1 << 62;
+
+/// One frame's 3-D feature of a map point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameView {
+    /// Id of the frame that saw the point.
+    pub frame: u64,
+    /// The frame's reference keyframe, which carries the view when the map moves.
+    pub reference: KeyFrameId,
+    /// The keypoint back-projected with its measured depth, in the frame's camera (metres).
+    pub point_camera: Vector3<f64>,
+    /// The same point in the reference keyframe's camera, from the frame's tracked pose.
+    pub point_reference: Vector3<f64>,
+    /// The same point in the world when it was stored (used if the keyframe is gone).
+    pub point_world: Vector3<f64>,
+}
+
+impl FrameView {
+    /// The view of frame `frame` tracked at `tcw` (world to camera), with reference keyframe
+    /// `reference` at `tkw` (world to keyframe camera), of a keypoint back-projected to
+    /// `point_camera`. `None` without a finite positive depth.
+    pub fn new(
+        frame: u64,
+        tcw: &Isometry3<f64>,
+        reference: KeyFrameId,
+        tkw: &Isometry3<f64>,
+        point_camera: Vector3<f64>,
+    ) -> Option<FrameView> {
+        let finite = point_camera.iter().all(|x| x.is_finite());
+        if !finite || point_camera.z <= 0.0 {
+            return None;
+        }
+        let world = tcw.inverse() * Point3::from(point_camera);
+        Some(FrameView {
+            frame,
+            reference,
+            point_camera,
+            point_reference: (tkw * world).coords,
+            point_world: world.coords,
+        })
+    }
+
+    /// The view as a cluster feature, placed through its reference keyframe's pose `tkw`
+    /// (world to camera) when known, else where it was stored.
+    pub fn feature(&self, tkw: Option<&Isometry3<f64>>) -> ClusterFeature {
+        let world = match tkw {
+            Some(t) => (t.inverse() * Point3::from(self.point_reference)).coords,
+            None => self.point_world,
+        };
+        ClusterFeature::placed(FRAME_VIEW_SOURCE_BIT | self.frame, self.point_camera, world)
+    }
+}
+
+/// The frame views of one map point, with bounded memory.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameViews {
+    recent: VecDeque<FrameView>,
+    folded_sum: Vector3<f64>,
+    folded_count: u64,
+}
+
+impl FrameViews {
+    /// Adds the newest view; when full, the oldest is folded into the running sum at its
+    /// stored world position.
+    pub fn push(&mut self, view: FrameView) {
+        if self.recent.len() == MCOR_CLUSTER_CAPACITY {
+            if let Some(old) = self.recent.pop_front() {
+                self.folded_sum += old.point_world;
+                self.folded_count += 1;
+            }
+        }
+        self.recent.push_back(view);
+    }
+
+    /// Absorbs the views of a point fused into this one (map-point replacement), in frame
+    /// order; views of a frame already present are not repeated.
+    pub fn merge(&mut self, other: &FrameViews) {
+        self.folded_sum += other.folded_sum;
+        self.folded_count += other.folded_count;
+        let mut all: Vec<FrameView> = self.recent.drain(..).collect();
+        for v in &other.recent {
+            if !all.iter().any(|w| w.frame == v.frame) {
+                all.push(*v);
+            }
+        }
+        all.sort_by_key(|v| v.frame);
+        for v in all {
+            self.push(v);
+        }
+    }
+
+    /// Views held individually, oldest first.
+    pub fn views(&self) -> impl ExactSizeIterator<Item = &FrameView> + '_ {
+        self.recent.iter()
+    }
+
+    /// Every view ever stored, folded ones included.
+    pub fn total_count(&self) -> u64 {
+        self.folded_count + self.recent.len() as u64
+    }
+
+    /// Whether no view was ever stored.
+    pub fn is_empty(&self) -> bool {
+        self.total_count() == 0
+    }
+
+    /// Adds the views to `cluster` after its keyframe features: the folded sum, then each view
+    /// placed with its reference keyframe's current pose `tkw_of(reference)` (world to camera).
+    pub fn extend_cluster(
+        &self,
+        cluster: &mut McorCluster,
+        mut tkw_of: impl FnMut(KeyFrameId) -> Option<Isometry3<f64>>,
+    ) {
+        cluster.add_folded(self.folded_sum, self.folded_count);
+        for v in &self.recent {
+            let tkw = tkw_of(v.reference);
+            cluster.push_distinct(v.feature(tkw.as_ref()));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Translation3, UnitQuaternion};
+
+    fn pose(x: f64, yaw: f64) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(x, 0.2, -0.1),
+            UnitQuaternion::from_euler_angles(0.0, 0.1, yaw),
+        )
+    }
+
+    #[test]
+    fn a_view_follows_its_reference_keyframe() {
+        let tcw = pose(0.3, 0.2);
+        let tkw = pose(0.1, -0.1);
+        let p = Vector3::new(0.2, -0.1, 1.7);
+        let v = FrameView::new(7, &tcw, KeyFrameId(3), &tkw, p).unwrap();
+        let world = (tcw.inverse() * Point3::from(p)).coords;
+        assert!((v.feature(Some(&tkw)).point_world() - world).norm() < 1e-12);
+        // The keyframe moves by a correction C (new Twk = C * Twk): the view moves with it.
+        let c = pose(0.5, 0.4);
+        let tkw_new = tkw * c.inverse();
+        let moved = v.feature(Some(&tkw_new)).point_world();
+        assert!((moved - (c * Point3::from(world)).coords).norm() < 1e-12);
+        // Its keyframe gone, it stays where it was stored; its depth is the frame's.
+        assert_eq!(v.feature(None).point_world(), world);
+        assert_eq!(v.feature(None).depth(), 1.7);
+        assert!(
+            FrameView::new(1, &tcw, KeyFrameId(0), &tkw, Vector3::new(0.0, 0.0, -1.0)).is_none()
+        );
+    }
+
+    #[test]
+    fn views_are_bounded_and_the_centroid_counts_every_view() {
+        let id = Isometry3::identity();
+        let mut views = FrameViews::default();
+        let n = MCOR_CLUSTER_CAPACITY + 8;
+        for f in 0..n {
+            let p = Vector3::new(f as f64, 0.0, 1.0);
+            views.push(FrameView::new(f as u64, &id, KeyFrameId(0), &id, p).unwrap());
+        }
+        assert_eq!(views.views().len(), MCOR_CLUSTER_CAPACITY);
+        assert_eq!(views.total_count(), n as u64);
+        assert_eq!(views.views().next().unwrap().frame, 8);
+        let mut cluster = McorCluster::new();
+        views.extend_cluster(&mut cluster, |_| Some(id));
+        assert_eq!(cluster.total_count(), n as u64);
+        let mean_x = (0..n).map(|f| f as f64).sum::<f64>() / n as f64;
+        assert!((cluster.centroid().unwrap().x - mean_x).abs() < 1e-12);
+    }
+
+    #[test]
+    fn merging_keeps_frame_order_and_drops_repeats() {
+        let id = Isometry3::identity();
+        let view = |f: u64| {
+            FrameView::new(f, &id, KeyFrameId(0), &id, Vector3::new(0.0, 0.0, 1.0)).unwrap()
+        };
+        let mut a = FrameViews::default();
+        let mut b = FrameViews::default();
+        for f in [1, 4, 6] {
+            a.push(view(f));
+        }
+        for f in [2, 4, 9] {
+            b.push(view(f));
+        }
+        a.merge(&b);
+        let frames: Vec<u64> = a.views().map(|v| v.frame).collect();
+        assert_eq!(frames, vec![1, 2, 4, 6, 9]);
+    }
+}
