@@ -6,8 +6,13 @@
 //! (15k points on the walls of a room, feature tracks of 4-20 keyframes).
 //!
 //! Run: `flock /tmp/nf-cargo.lock cargo bench -p slam-core --bench optimize`.
+//!
+//! With `NF_BENCH_ONCE=local_ba` in the environment the benchmark binary instead solves the
+//! local BA problem once and prints a fingerprint of its result (every bit of the refined poses
+//! and points, the outliers and the costs), which makes a cheap bit-identity check and a short
+//! run to count instructions under `valgrind --tool=callgrind`.
 
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use criterion::{criterion_group, BatchSize, Criterion};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -366,5 +371,52 @@ fn bench_optimize(c: &mut Criterion) {
     group.finish();
 }
 
+/// FNV-1a over 64-bit words.
+fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for w in words {
+        for byte in w.to_le_bytes() {
+            h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// One local BA on the benchmark's problem; prints the fingerprint of its result.
+fn local_ba_once() {
+    let camera = Camera::tum_fr3();
+    let mut problem = local_ba_input(&camera);
+    let report = local_bundle_adjustment(&camera, &mut problem, &BaConfig::default());
+    let mut words: Vec<u64> = Vec::new();
+    for kf in &problem.keyframes {
+        words.extend(kf.tcw.rotation.coords.iter().map(|x| x.to_bits()));
+        words.extend(kf.tcw.translation.vector.iter().map(|x| x.to_bits()));
+    }
+    for p in &problem.points {
+        words.extend(p.position.iter().map(|x| x.to_bits()));
+    }
+    words.extend(report.outliers.iter().map(|&o| u64::from(o)));
+    words.extend(report.pass_costs.iter().flatten().map(|c| c.to_bits()));
+    words.push(report.final_cost.to_bits());
+    println!(
+        "local BA: {} iterations, chi2 {:.6e} -> {:.6e}, {} outliers, fingerprint {:016x}",
+        report.iterations,
+        report.initial_cost,
+        report.final_cost,
+        report.outliers.iter().filter(|&&o| o).count(),
+        fingerprint(words)
+    );
+}
+
 criterion_group!(benches, bench_optimize);
-criterion_main!(benches);
+
+fn main() {
+    match std::env::var("NF_BENCH_ONCE").as_deref() {
+        Ok("local_ba") => local_ba_once(),
+        Ok(other) => panic!("NF_BENCH_ONCE={other}: only local_ba runs once"),
+        Err(_) => {
+            benches();
+            Criterion::default().configure_from_args().final_summary();
+        }
+    }
+}
