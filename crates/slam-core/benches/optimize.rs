@@ -10,7 +10,8 @@
 //! With `NF_BENCH_ONCE=local_ba` in the environment the benchmark binary instead solves the
 //! local BA problem once and prints a fingerprint of its result (every bit of the refined poses
 //! and points, the outliers and the costs), which makes a cheap bit-identity check and a short
-//! run to count instructions under `valgrind --tool=callgrind`.
+//! run to count instructions under `valgrind --tool=callgrind`; `NF_BENCH_REPEAT=n` times `n`
+//! runs before that and prints the fastest and the median.
 
 use criterion::{criterion_group, BatchSize, Criterion};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -385,7 +386,34 @@ fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
 /// One local BA on the benchmark's problem; prints the fingerprint of its result.
 fn local_ba_once() {
     let camera = Camera::tum_fr3();
-    let mut problem = local_ba_input(&camera);
+    let input = local_ba_input(&camera);
+    // NF_BENCH_REPEAT=n: also time n more runs and print the fastest and the median (robust to a
+    // busy machine, unlike a mean).
+    let repeat: usize = std::env::var("NF_BENCH_REPEAT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(0);
+    let mut times: Vec<f64> = (0..repeat)
+        .map(|_| {
+            let mut p = input.clone();
+            let t = Instant::now();
+            std::hint::black_box(local_bundle_adjustment(
+                &camera,
+                &mut p,
+                &BaConfig::default(),
+            ));
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    if !times.is_empty() {
+        println!(
+            "local BA x {repeat}: fastest {:.2} ms, median {:.2} ms",
+            times[0],
+            times[times.len() / 2]
+        );
+    }
+    let mut problem = input;
     let report = local_bundle_adjustment(&camera, &mut problem, &BaConfig::default());
     let mut words: Vec<u64> = Vec::new();
     for kf in &problem.keyframes {

@@ -105,7 +105,7 @@ impl Padded6x3 {
 }
 
 /// The lower triangle of the reduced camera system by 6 x 6 blocks, block `(p, q)` (`q <= p`)
-/// as six [`Lanes`], line `r` holding row `r` of the block. Of a diagonal block only the
+/// as six [`Lanes`], line `r` holding row `r` of the block, block columns one after the other. Of a diagonal block only the
 /// entries on and below the diagonal are meaningful (the others collect unused values).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PackedBlocks {
@@ -121,11 +121,18 @@ impl PackedBlocks {
         self.lines.resize(3 * n * (n + 1), Lanes::ZERO);
     }
 
+    /// The first line of block `(p, q)`, `q <= p`. The blocks are stored by block columns
+    /// (`(q, q), (q + 1, q), ...`): the pair updates of one observation run down a column.
+    #[inline(always)]
+    fn block_at(&self, p: usize, q: usize) -> usize {
+        6 * (q * self.n - q * q.saturating_sub(1) / 2 + (p - q))
+    }
+
     /// The six lines of block `(p, q)`, `q <= p`.
     #[inline(always)]
     fn block_mut(&mut self, p: usize, q: usize) -> &mut [Lanes; 6] {
         debug_assert!(q <= p && p < self.n);
-        let at = 6 * (p * (p + 1) / 2 + q);
+        let at = self.block_at(p, q);
         (&mut self.lines[at..at + 6]).try_into().expect("six lines")
     }
 
@@ -184,7 +191,7 @@ impl PackedBlocks {
         let data = dense.as_mut_slice();
         for p in 0..self.n {
             for q in 0..=p {
-                let at = 6 * (p * (p + 1) / 2 + q);
+                let at = self.block_at(p, q);
                 for (r, line) in self.lines[at..at + 6].iter().enumerate() {
                     let cols = if p == q { r + 1 } else { 6 };
                     for c in 0..cols {
