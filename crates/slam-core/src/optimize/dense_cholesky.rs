@@ -31,6 +31,39 @@ fn positive_pivot(diag: f64) -> bool {
 /// When `a.len() != n * n` (a caller bug).
 pub(crate) fn cholesky_in_place(a: &mut [f64], n: usize) -> bool {
     assert_eq!(a.len(), n * n, "cholesky_in_place: not an n x n matrix");
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the function only enables AVX-512 code generation for safe code; the CPU
+        // supports AVX-512F, checked on the line above.
+        return unsafe { cholesky_in_place_avx512(a, n) };
+    }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: as above, for AVX2.
+        return unsafe { cholesky_in_place_avx2(a, n) };
+    }
+    cholesky_in_place_impl(a, n)
+}
+
+/// [`cholesky_in_place`] built for AVX-512 (a chunk of a column in one register). Call only on
+/// a CPU with AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn cholesky_in_place_avx512(a: &mut [f64], n: usize) -> bool {
+    cholesky_in_place_impl(a, n)
+}
+
+/// [`cholesky_in_place`] built for AVX2. Call only on a CPU with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn cholesky_in_place_avx2(a: &mut [f64], n: usize) -> bool {
+    cholesky_in_place_impl(a, n)
+}
+
+/// The body of [`cholesky_in_place`] (IEEE arithmetic without fused multiply-add on every
+/// build: the same bits).
+#[inline(always)]
+fn cholesky_in_place_impl(a: &mut [f64], n: usize) -> bool {
     for j in 0..n {
         let (done, rest) = a.split_at_mut(j * n);
         let col_j = &mut rest[..n];

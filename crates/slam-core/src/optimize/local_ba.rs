@@ -20,7 +20,7 @@ use super::fixed_mul::{
 use super::lm::{levenberg_marquardt, LmProblem};
 use super::ordering::{inverse_permutation, Adjacency};
 use super::packed::{sub_mul_vector, Lanes, PackedBlocks, Padded6x3};
-use super::residual::{linearize_observation, observation_chi2, Measurement};
+use super::residual::{linearize_observation, observation_chi2, Measurement, PointLinearization};
 use super::robust::{kernel_cost, kernel_weight};
 use crate::geometry::{exp_se3, Vector6};
 use crate::Camera;
@@ -267,6 +267,9 @@ struct BaSolver<'a> {
     damping: Vec<f64>,
     free: Vec<(usize, usize)>,
     y: Vec<Padded6x3>,
+    /// Work space of [`LmProblem::linearize`]: one point's camera-frame points and
+    /// linearizations, per observation.
+    lin: Vec<(Vector3<f64>, Option<PointLinearization>)>,
 }
 
 impl<'a> BaSolver<'a> {
@@ -320,6 +323,7 @@ impl<'a> BaSolver<'a> {
             damping: vec![0.0; points.len()],
             free: Vec::new(),
             y: Vec::new(),
+            lin: Vec::new(),
             points,
         }
     }
@@ -437,16 +441,24 @@ impl<'a> BaSolver<'a> {
         mut envelope: Option<&mut (EnvelopeMatrix, DVector<f64>)>,
     ) -> Option<()> {
         let n_points = self.points.len();
+        // The damped point blocks' inverses first, all of them: independent of each other, so
+        // their square roots and divisions overlap (between the pair updates of two points they
+        // would each be one long wait).
         for j in 0..n_points {
-            let range = self.point_start[j]..self.point_start[j + 1];
-            if range.is_empty() {
+            if self.point_start[j] == self.point_start[j + 1] {
                 continue;
             }
             let vj = &self.v[j];
             let max_diag = vj[(0, 0)].max(vj[(1, 1)]).max(vj[(2, 2)]);
             self.damping[j] = lambda + POINT_DAMPING * max_diag + POINT_DAMPING_MIN;
-            let inv = cholesky_inverse3(&(vj + Matrix3::identity() * self.damping[j]))?;
-            self.v_inv[j] = inv;
+            self.v_inv[j] = cholesky_inverse3(&(vj + Matrix3::identity() * self.damping[j]))?;
+        }
+        for j in 0..n_points {
+            let range = self.point_start[j]..self.point_start[j + 1];
+            if range.is_empty() {
+                continue;
+            }
+            let inv = self.v_inv[j];
             // The point's observations by free keyframes: (variable, entry of point_obs).
             self.free.clear();
             self.free
@@ -499,18 +511,28 @@ impl BaSolver<'_> {
         self.u.iter_mut().for_each(|m| *m = Matrix6::zeros());
         self.gc.iter_mut().for_each(|g| *g = Vector6::zeros());
         for j in 0..self.points.len() {
-            let mut v = Matrix3::zeros();
-            let mut gp = Vector3::zeros();
-            for k in self.point_start[j]..self.point_start[j + 1] {
+            let range = self.point_start[j]..self.point_start[j + 1];
+            // First the residuals and their blocks in camera coordinates, observation by
+            // observation: these are independent, so the divisions and square roots of one
+            // overlap with those of the next instead of heading one long chain per observation.
+            self.lin.clear();
+            for k in range.clone() {
                 let o = &self.obs[self.point_obs[k]];
-                let pose = &rigid[o.keyframe];
-                let p_c = pose.transform(&self.points[j]);
+                let p_c = rigid[o.keyframe].transform(&self.points[j]);
                 let (robust, delta) = (self.robust, o.measurement.huber_delta());
-                let Some(lin) =
+                let lin =
                     linearize_observation(self.camera, &o.measurement, o.inv_sigma2, &p_c, |c| {
                         kernel_weight(robust, delta, c)
-                    })
-                else {
+                    });
+                self.lin.push((p_c, lin));
+            }
+            // Then the blocks of the normal equations, accumulated in the same order as ever.
+            let mut v = Matrix3::zeros();
+            let mut gp = Vector3::zeros();
+            for (k, &(p_c, lin)) in range.zip(&self.lin) {
+                let o = &self.obs[self.point_obs[k]];
+                let pose = &rigid[o.keyframe];
+                let Some(lin) = lin else {
                     self.w[k] = Padded6x3::ZERO;
                     continue;
                 };
