@@ -6,8 +6,14 @@
 //! (15k points on the walls of a room, feature tracks of 4-20 keyframes).
 //!
 //! Run: `flock /tmp/nf-cargo.lock cargo bench -p slam-core --bench optimize`.
+//!
+//! With `NF_BENCH_ONCE=local_ba` in the environment the benchmark binary instead solves the
+//! local BA problem once and prints a fingerprint of its result (every bit of the refined poses
+//! and points, the outliers and the costs), which makes a cheap bit-identity check and a short
+//! run to count instructions under `valgrind --tool=callgrind`; `NF_BENCH_REPEAT=n` times `n`
+//! runs before that and prints the fastest and the median.
 
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use criterion::{criterion_group, BatchSize, Criterion};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -366,5 +372,79 @@ fn bench_optimize(c: &mut Criterion) {
     group.finish();
 }
 
+/// FNV-1a over 64-bit words.
+fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for w in words {
+        for byte in w.to_le_bytes() {
+            h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// One local BA on the benchmark's problem; prints the fingerprint of its result.
+fn local_ba_once() {
+    let camera = Camera::tum_fr3();
+    let input = local_ba_input(&camera);
+    // NF_BENCH_REPEAT=n: also time n more runs and print the fastest and the median (robust to a
+    // busy machine, unlike a mean).
+    let repeat: usize = std::env::var("NF_BENCH_REPEAT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(0);
+    let mut times: Vec<f64> = (0..repeat)
+        .map(|_| {
+            let mut p = input.clone();
+            let t = Instant::now();
+            std::hint::black_box(local_bundle_adjustment(
+                &camera,
+                &mut p,
+                &BaConfig::default(),
+            ));
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    if !times.is_empty() {
+        println!(
+            "local BA x {repeat}: fastest {:.2} ms, median {:.2} ms",
+            times[0],
+            times[times.len() / 2]
+        );
+    }
+    let mut problem = input;
+    let report = local_bundle_adjustment(&camera, &mut problem, &BaConfig::default());
+    let mut words: Vec<u64> = Vec::new();
+    for kf in &problem.keyframes {
+        words.extend(kf.tcw.rotation.coords.iter().map(|x| x.to_bits()));
+        words.extend(kf.tcw.translation.vector.iter().map(|x| x.to_bits()));
+    }
+    for p in &problem.points {
+        words.extend(p.position.iter().map(|x| x.to_bits()));
+    }
+    words.extend(report.outliers.iter().map(|&o| u64::from(o)));
+    words.extend(report.pass_costs.iter().flatten().map(|c| c.to_bits()));
+    words.push(report.final_cost.to_bits());
+    println!(
+        "local BA: {} iterations, chi2 {:.6e} -> {:.6e}, {} outliers, fingerprint {:016x}",
+        report.iterations,
+        report.initial_cost,
+        report.final_cost,
+        report.outliers.iter().filter(|&&o| o).count(),
+        fingerprint(words)
+    );
+}
+
 criterion_group!(benches, bench_optimize);
-criterion_main!(benches);
+
+fn main() {
+    match std::env::var("NF_BENCH_ONCE").as_deref() {
+        Ok("local_ba") => local_ba_once(),
+        Ok(other) => panic!("NF_BENCH_ONCE={other}: only local_ba runs once"),
+        Err(_) => {
+            benches();
+            Criterion::default().configure_from_args().final_summary();
+        }
+    }
+}

@@ -33,17 +33,32 @@ impl Node {
     }
 }
 
+/// A corner as the quadtree moves it around: its position as the box tests read it, its score
+/// and its index in the caller's slice. Carrying these instead of the index alone makes every
+/// pass over a node a linear scan (no lookup of the corner per visit, which dominated on densely
+/// textured images with tens of thousands of corners per frame).
+#[derive(Clone, Copy, Debug, Default)]
+struct Entry {
+    x: f32,
+    y: f32,
+    index: u32,
+    score: u8,
+}
+
 /// Reusable buffers of [`distribute`].
 #[derive(Clone, Debug, Default)]
 pub struct QuadScratch {
-    perm: Vec<usize>,
-    tmp: Vec<usize>,
+    perm: Vec<Entry>,
+    tmp: Vec<Entry>,
     nodes: Vec<Node>,
     order: Vec<usize>,
 }
 
 /// Chooses at most `target` of `corners` (positions inside the box `[x0, x1) x [y0, y1)`)
 /// spread evenly by a quadtree, and writes their indices into `out` (sorted ascending).
+///
+/// # Panics
+/// With more than `u32::MAX` corners.
 pub fn distribute(
     corners: &[Corner],
     bounds: (f32, f32, f32, f32),
@@ -55,26 +70,38 @@ pub fn distribute(
     if corners.is_empty() || target == 0 {
         return;
     }
+    assert!(u32::try_from(corners.len()).is_ok(), "too many corners");
     let (bx0, by0, bx1, by1) = bounds;
     let bw = (bx1 - bx0).max(1.0);
     let bh = (by1 - by0).max(1.0);
     // Root nodes: as many square-ish columns as the aspect ratio asks for.
     let n_ini = ((bw / bh).round() as usize).max(1);
     let hx = bw / n_ini as f32;
-    let root_of = |c: &Corner| (((c.x as f32 - bx0) / hx).floor().max(0.0) as usize).min(n_ini - 1);
+    // `(v.floor().max(0.0) as usize)` without the floor: the cast truncates toward zero and
+    // saturates below at 0 (NaN included), which is the same integer for every `v`.
+    let root_of = |e: &Entry| (((e.x - bx0) / hx) as usize).min(n_ini - 1);
+    scratch.tmp.clear();
+    scratch
+        .tmp
+        .extend(corners.iter().enumerate().map(|(i, c)| Entry {
+            x: c.x as f32,
+            y: c.y as f32,
+            index: i as u32,
+            score: c.score,
+        }));
     let mut counts = vec![0usize; n_ini + 1];
-    for c in corners {
-        counts[root_of(c) + 1] += 1;
+    for e in &scratch.tmp {
+        counts[root_of(e) + 1] += 1;
     }
     for i in 0..n_ini {
         counts[i + 1] += counts[i];
     }
     scratch.perm.clear();
-    scratch.perm.resize(corners.len(), 0);
+    scratch.perm.resize(corners.len(), Entry::default());
     let mut fill = counts.clone();
-    for (i, c) in corners.iter().enumerate() {
-        let r = root_of(c);
-        scratch.perm[fill[r]] = i;
+    for e in &scratch.tmp {
+        let r = root_of(e);
+        scratch.perm[fill[r]] = *e;
         fill[r] += 1;
     }
     scratch.nodes.clear();
@@ -109,7 +136,7 @@ pub fn distribute(
         }
         for k in 0..scratch.order.len() {
             let i = scratch.order[k];
-            split(i, corners, scratch);
+            split(i, scratch);
             if !all_fit && scratch.nodes.len() >= target {
                 break;
             }
@@ -118,15 +145,14 @@ pub fn distribute(
 
     // Each node keeps its strongest corner (the first in raster order on ties).
     for node in &scratch.nodes {
-        let mut best = scratch.perm[node.start];
-        for &i in &scratch.perm[node.start + 1..node.end] {
-            if corners[i].score > corners[best].score
-                || (corners[i].score == corners[best].score && i < best)
-            {
-                best = i;
+        let entries = &scratch.perm[node.start..node.end];
+        let mut best = entries[0];
+        for e in &entries[1..] {
+            if e.score > best.score || (e.score == best.score && e.index < best.index) {
+                best = *e;
             }
         }
-        out.push(best);
+        out.push(best.index as usize);
     }
     if out.len() > target {
         out.sort_by(|&a, &b| corners[b].score.cmp(&corners[a].score).then(a.cmp(&b)));
@@ -136,24 +162,25 @@ pub fn distribute(
 }
 
 /// Splits node `i` in four; the first non-empty child replaces it, the others are appended.
-fn split(i: usize, corners: &[Corner], scratch: &mut QuadScratch) {
+/// The corners keep their relative order within each child.
+fn split(i: usize, scratch: &mut QuadScratch) {
     let n = scratch.nodes[i];
     let mx = 0.5 * (n.x0 + n.x1);
     let my = 0.5 * (n.y0 + n.y1);
-    let quad = |c: &Corner| (c.x as f32 >= mx) as usize + 2 * ((c.y as f32 >= my) as usize);
+    let quad = |e: &Entry| (e.x >= mx) as usize + 2 * ((e.y >= my) as usize);
     let mut counts = [0usize; 5];
-    for &p in &scratch.perm[n.start..n.end] {
-        counts[quad(&corners[p]) + 1] += 1;
+    for e in &scratch.perm[n.start..n.end] {
+        counts[quad(e) + 1] += 1;
     }
     for q in 0..4 {
         counts[q + 1] += counts[q];
     }
     scratch.tmp.clear();
-    scratch.tmp.resize(n.len(), 0);
+    scratch.tmp.resize(n.len(), Entry::default());
     let mut fill = counts;
-    for &p in &scratch.perm[n.start..n.end] {
-        let q = quad(&corners[p]);
-        scratch.tmp[fill[q]] = p;
+    for e in &scratch.perm[n.start..n.end] {
+        let q = quad(e);
+        scratch.tmp[fill[q]] = *e;
         fill[q] += 1;
     }
     scratch.perm[n.start..n.end].copy_from_slice(&scratch.tmp);
@@ -291,5 +318,193 @@ mod tests {
             &mut out,
         );
         assert_eq!(out, vec![1]);
+    }
+
+    /// Buffers of [`distribute_reference`].
+    #[derive(Default)]
+    struct RefScratch {
+        perm: Vec<usize>,
+        tmp: Vec<usize>,
+        nodes: Vec<Node>,
+        order: Vec<usize>,
+    }
+
+    /// The implementation before corners were carried by value (per-visit lookups of
+    /// `corners[p]`): the reference the faster one must reproduce exactly.
+    /// Chooses at most `target` of `corners` (positions inside the box `[x0, x1) x [y0, y1)`)
+    /// spread evenly by a quadtree, and writes their indices into `out` (sorted ascending).
+    fn distribute_reference(
+        corners: &[Corner],
+        bounds: (f32, f32, f32, f32),
+        target: usize,
+        scratch: &mut RefScratch,
+        out: &mut Vec<usize>,
+    ) {
+        out.clear();
+        if corners.is_empty() || target == 0 {
+            return;
+        }
+        let (bx0, by0, bx1, by1) = bounds;
+        let bw = (bx1 - bx0).max(1.0);
+        let bh = (by1 - by0).max(1.0);
+        // Root nodes: as many square-ish columns as the aspect ratio asks for.
+        let n_ini = ((bw / bh).round() as usize).max(1);
+        let hx = bw / n_ini as f32;
+        let root_of =
+            |c: &Corner| (((c.x as f32 - bx0) / hx).floor().max(0.0) as usize).min(n_ini - 1);
+        let mut counts = vec![0usize; n_ini + 1];
+        for c in corners {
+            counts[root_of(c) + 1] += 1;
+        }
+        for i in 0..n_ini {
+            counts[i + 1] += counts[i];
+        }
+        scratch.perm.clear();
+        scratch.perm.resize(corners.len(), 0);
+        let mut fill = counts.clone();
+        for (i, c) in corners.iter().enumerate() {
+            let r = root_of(c);
+            scratch.perm[fill[r]] = i;
+            fill[r] += 1;
+        }
+        scratch.nodes.clear();
+        for r in 0..n_ini {
+            if counts[r + 1] > counts[r] {
+                scratch.nodes.push(Node {
+                    x0: bx0 + hx * r as f32,
+                    y0: by0,
+                    x1: bx0 + hx * (r + 1) as f32,
+                    y1: by0 + bh,
+                    start: counts[r],
+                    end: counts[r + 1],
+                });
+            }
+        }
+
+        while scratch.nodes.len() < target {
+            scratch.order.clear();
+            scratch
+                .order
+                .extend((0..scratch.nodes.len()).filter(|&i| scratch.nodes[i].splittable()));
+            if scratch.order.is_empty() {
+                break;
+            }
+            let all_fit = scratch.nodes.len() + 3 * scratch.order.len() <= target;
+            if !all_fit {
+                // Final round: split the most populated nodes first until the target is reached.
+                let nodes = &scratch.nodes;
+                scratch
+                    .order
+                    .sort_by(|&a, &b| nodes[b].len().cmp(&nodes[a].len()).then(a.cmp(&b)));
+            }
+            for k in 0..scratch.order.len() {
+                let i = scratch.order[k];
+                split_reference(i, corners, scratch);
+                if !all_fit && scratch.nodes.len() >= target {
+                    break;
+                }
+            }
+        }
+
+        // Each node keeps its strongest corner (the first in raster order on ties).
+        for node in &scratch.nodes {
+            let mut best = scratch.perm[node.start];
+            for &i in &scratch.perm[node.start + 1..node.end] {
+                if corners[i].score > corners[best].score
+                    || (corners[i].score == corners[best].score && i < best)
+                {
+                    best = i;
+                }
+            }
+            out.push(best);
+        }
+        if out.len() > target {
+            out.sort_by(|&a, &b| corners[b].score.cmp(&corners[a].score).then(a.cmp(&b)));
+            out.truncate(target);
+        }
+        out.sort_unstable();
+    }
+
+    /// Splits node `i` in four; the first non-empty child replaces it, the others are appended.
+    fn split_reference(i: usize, corners: &[Corner], scratch: &mut RefScratch) {
+        let n = scratch.nodes[i];
+        let mx = 0.5 * (n.x0 + n.x1);
+        let my = 0.5 * (n.y0 + n.y1);
+        let quad = |c: &Corner| (c.x as f32 >= mx) as usize + 2 * ((c.y as f32 >= my) as usize);
+        let mut counts = [0usize; 5];
+        for &p in &scratch.perm[n.start..n.end] {
+            counts[quad(&corners[p]) + 1] += 1;
+        }
+        for q in 0..4 {
+            counts[q + 1] += counts[q];
+        }
+        scratch.tmp.clear();
+        scratch.tmp.resize(n.len(), 0);
+        let mut fill = counts;
+        for &p in &scratch.perm[n.start..n.end] {
+            let q = quad(&corners[p]);
+            scratch.tmp[fill[q]] = p;
+            fill[q] += 1;
+        }
+        scratch.perm[n.start..n.end].copy_from_slice(&scratch.tmp);
+        let boxes = [
+            (n.x0, n.y0, mx, my),
+            (mx, n.y0, n.x1, my),
+            (n.x0, my, mx, n.y1),
+            (mx, my, n.x1, n.y1),
+        ];
+        let mut replaced = false;
+        for q in 0..4 {
+            if counts[q + 1] == counts[q] {
+                continue;
+            }
+            let (x0, y0, x1, y1) = boxes[q];
+            let child = Node {
+                x0,
+                y0,
+                x1,
+                y1,
+                start: n.start + counts[q],
+                end: n.start + counts[q + 1],
+            };
+            if replaced {
+                scratch.nodes.push(child);
+            } else {
+                scratch.nodes[i] = child;
+                replaced = true;
+            }
+        }
+    }
+
+    #[test]
+    fn equals_the_reference_implementation() {
+        let mut scratch = QuadScratch::default();
+        let mut ref_scratch = RefScratch::default();
+        for seed in 0..40u64 {
+            let mut rng = ChaCha8Rng::seed_from_u64(1000 + seed);
+            // Sparse to very dense (every pixel a corner in places), few to many score levels.
+            let n = [10, 300, 3000, 20000][seed as usize % 4];
+            let levels = [3, 255][seed as usize % 2];
+            let mut cs: Vec<Corner> = (0..n)
+                .map(|_| Corner {
+                    x: rng.random_range(19..621),
+                    y: rng.random_range(19..461),
+                    score: rng.random_range(7..7 + levels.min(248)) as u8,
+                })
+                .collect();
+            cs.sort();
+            cs.dedup_by_key(|c| (c.x, c.y));
+            for (bounds, target) in [
+                ((19.0, 19.0, 621.0, 461.0), 217),
+                ((16.0, 16.0, 624.0, 464.0), 1000),
+                ((19.0, 19.0, 300.0, 461.0), 5),
+                ((19.0, 19.0, 621.0, 461.0), 1),
+            ] {
+                let (mut got, mut want) = (Vec::new(), Vec::new());
+                distribute(&cs, bounds, target, &mut scratch, &mut got);
+                distribute_reference(&cs, bounds, target, &mut ref_scratch, &mut want);
+                assert_eq!(got, want, "seed {seed}, {n} corners, target {target}");
+            }
+        }
     }
 }

@@ -7,7 +7,7 @@
 //! (`((a_i0 b_0j + a_i1 b_1j) + a_i2 b_2j) + ...`, no fused multiply-add), so the results are the
 //! same bits: swapping these in for nalgebra's operator leaves every trajectory unchanged.
 
-use nalgebra::{Matrix3, Matrix3x6, SMatrix, Vector3};
+use nalgebra::{Matrix3, Matrix3x6, Matrix6, SMatrix, Vector3};
 
 /// `a * b`, bit for bit as nalgebra computes it.
 #[inline(always)]
@@ -105,6 +105,48 @@ pub(crate) fn mul_left_jacobian(m: &Matrix3<f64>, p: &Vector3<f64>) -> Matrix3x6
     out
 }
 
+/// `u += A^T m A` on and below the diagonal only, for the left-perturbation Jacobian
+/// `A = [-[p]x | I]` of the point `p`: each entry as `u + left_jacobian_transpose_mul(p,
+/// &mul_left_jacobian(m, p))` computes it; the strict upper triangle of `u` is left as it was
+/// (for a matrix of which only the lower triangle is read).
+#[inline(always)]
+pub(crate) fn add_left_jacobian_quadratic_lower(
+    u: &mut Matrix6<f64>,
+    m: &Matrix3<f64>,
+    p: &Vector3<f64>,
+) {
+    let mm = mul_left_jacobian(m, p);
+    let s = skew_entries(p);
+    for c in 0..6 {
+        let col = [
+            s[1][0] * mm[(1, c)] + s[2][0] * mm[(2, c)],
+            s[0][1] * mm[(0, c)] + s[2][1] * mm[(2, c)],
+            s[0][2] * mm[(0, c)] + s[1][2] * mm[(1, c)],
+            mm[(0, c)],
+            mm[(1, c)],
+            mm[(2, c)],
+        ];
+        for r in c..6 {
+            u[(r, c)] += col[r];
+        }
+    }
+}
+
+/// `v += a^T b` on and below the diagonal only, each entry as `v + transpose_mul(a, b)`
+/// computes it; the strict upper triangle of `v` is left as it was.
+#[inline(always)]
+pub(crate) fn add_transpose_mul_lower(v: &mut Matrix3<f64>, a: &Matrix3<f64>, b: &Matrix3<f64>) {
+    for c in 0..3 {
+        for r in c..3 {
+            let mut s = a[(0, r)] * b[(0, c)];
+            for k in 1..3 {
+                s += a[(k, r)] * b[(k, c)];
+            }
+            v[(r, c)] += s;
+        }
+    }
+}
+
 /// The entries `[row][column]` of `-[p]x` as [`crate::geometry::d_point_d_left_perturbation`]
 /// computes them (negation is exact); the diagonal is zero and not read.
 #[inline(always)]
@@ -131,7 +173,7 @@ fn dot_row_col<const R: usize, const K: usize, const C: usize>(
 mod tests {
     use super::*;
     use crate::geometry::d_point_d_left_perturbation;
-    use nalgebra::{Matrix4x3, Matrix6, Matrix6x3, Vector4, Vector6};
+    use nalgebra::{Matrix4x3, Matrix6x3, Vector4, Vector6};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -212,6 +254,28 @@ mod tests {
             assert_eq!(left_jacobian_transpose_mul(&p, &v), a.transpose() * v);
             let ma = m * a;
             assert_eq!(left_jacobian_transpose_mul(&p, &ma), a.transpose() * ma);
+            // The lower-triangle accumulations: the same bits as the full update there.
+            let mut u: Matrix6<f64> = random(&mut rng);
+            let mut want = u + left_jacobian_transpose_mul(&p, &mul_left_jacobian(&m, &p));
+            let before = u;
+            add_left_jacobian_quadratic_lower(&mut u, &m, &p);
+            for c in 0..6 {
+                for r in 0..6 {
+                    if r < c {
+                        want[(r, c)] = before[(r, c)];
+                    }
+                }
+            }
+            assert!(same_bits(&u, &want));
+            let (mut v, a3, b3): (Matrix3<f64>, Matrix3<f64>, Matrix3<f64>) =
+                (random(&mut rng), random(&mut rng), random(&mut rng));
+            let mut want = v + transpose_mul(&a3, &b3);
+            let before = v;
+            add_transpose_mul_lower(&mut v, &a3, &b3);
+            for (r, c) in [(0, 1), (0, 2), (1, 2)] {
+                want[(r, c)] = before[(r, c)];
+            }
+            assert!(same_bits(&v, &want));
             // Away from exact zeros, the same bits.
             let dense: Matrix3<f64> = Matrix3::from_fn(|_, _| rng.random_range(0.5..2.0));
             let full = a.transpose() * (dense * a);

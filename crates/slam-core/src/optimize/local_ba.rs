@@ -11,13 +11,16 @@
 
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, Matrix6x3, Vector3};
 
+use super::dense_cholesky::{cholesky_in_place, cholesky_inverse3, cholesky_solve_in_place};
 use super::envelope::EnvelopeMatrix;
 use super::fixed_mul::{
-    left_jacobian_transpose_mul, mul, mul_left_jacobian, mul_transpose, transpose_mul,
+    add_left_jacobian_quadratic_lower, add_transpose_mul_lower, left_jacobian_transpose_mul, mul,
+    mul_transpose, transpose_mul,
 };
 use super::lm::{levenberg_marquardt, LmProblem};
 use super::ordering::{inverse_permutation, Adjacency};
-use super::residual::{linearize_observation, observation_chi2, Measurement};
+use super::packed::{sub_mul_vector, Lanes, PackedBlocks, Padded6x3};
+use super::residual::{linearize_observation, observation_chi2, Measurement, PointLinearization};
 use super::robust::{kernel_cost, kernel_weight};
 use crate::geometry::{exp_se3, Vector6};
 use crate::Camera;
@@ -244,21 +247,29 @@ struct BaSolver<'a> {
     trial_points: Vec<Vector3<f64>>,
     cost: f64,
     trial_cost: f64,
-    /// Camera blocks `U_i` and right-hand sides `g_i` (per free keyframe).
+    /// Camera blocks `U_i` and right-hand sides `g_i` (per free keyframe). Of `U_i` and `V_j`
+    /// only the lower triangles are computed (the upper ones stay zero): nothing reads them.
     u: Vec<Matrix6<f64>>,
     gc: Vec<Vector6>,
     /// Point blocks `V_j` and right-hand sides (per point).
     v: Vec<Matrix3<f64>>,
     gp: Vec<Vector3<f64>>,
-    /// Camera-point blocks `W` per entry of `point_obs` (zero for fixed keyframes).
-    w: Vec<Matrix6x3<f64>>,
+    /// Camera-point blocks `W` per entry of `point_obs` (zero for fixed keyframes), padded.
+    w: Vec<Padded6x3>,
     /// Work space of [`LmProblem::solve`], kept across calls so that an iteration allocates
-    /// nothing: the dense reduced camera system, `V_j^-1`, the point damping and one point's
-    /// observations by free keyframes (variable, entry of `point_obs`).
+    /// nothing: the reduced camera system by blocks (dense storage), its right-hand side by
+    /// camera, its dense copy for the factorization, `V_j^-1`, the point damping, one point's
+    /// observations by free keyframes (variable, entry of `point_obs`) and their `W V_j^-1`.
+    packed: PackedBlocks,
+    rhs_lanes: Vec<Lanes>,
     dense: DMatrix<f64>,
     v_inv: Vec<Matrix3<f64>>,
     damping: Vec<f64>,
     free: Vec<(usize, usize)>,
+    y: Vec<Padded6x3>,
+    /// Work space of [`LmProblem::linearize`]: one point's camera-frame points and
+    /// linearizations, per observation.
+    lin: Vec<(Vector3<f64>, Option<PointLinearization>)>,
 }
 
 impl<'a> BaSolver<'a> {
@@ -305,10 +316,14 @@ impl<'a> BaSolver<'a> {
             v: vec![Matrix3::zeros(); points.len()],
             gp: vec![Vector3::zeros(); points.len()],
             w: Vec::new(),
+            packed: PackedBlocks::default(),
+            rhs_lanes: Vec::new(),
             dense: DMatrix::zeros(0, 0),
             v_inv: vec![Matrix3::zeros(); points.len()],
             damping: vec![0.0; points.len()],
             free: Vec::new(),
+            y: Vec::new(),
+            lin: Vec::new(),
             points,
         }
     }
@@ -339,7 +354,7 @@ impl<'a> BaSolver<'a> {
             .iter()
             .map(|&i| self.kf_var[self.obs[i].keyframe])
             .collect();
-        self.w = vec![Matrix6x3::zeros(); self.point_obs.len()];
+        self.w = vec![Padded6x3::ZERO; self.point_obs.len()];
         self.cost = self
             .cost_at(&self.poses, &self.points)
             .unwrap_or(f64::INFINITY);
@@ -371,38 +386,105 @@ impl<'a> BaSolver<'a> {
 
     /// Eliminates every point from the damped normal equations: `S -= W V^-1 W^T`,
     /// `rhs -= W V^-1 g_p`, keeping `V^-1` and the point damping for the back-substitution.
-    /// `None` when a point block is not positive definite. (Compiling this loop for AVX2 as
-    /// well was measured: no gain, the pair updates are bound by their loads and stores.)
+    /// `S` and `rhs` are `self.packed` and `self.rhs_lanes` (a local window) or `envelope`
+    /// (a whole map). `None` when a point block is not positive definite.
+    ///
+    /// The loop is compiled for AVX-512 and for AVX2 as well, chosen at run time: the pair
+    /// updates on whole [`Lanes`] then take one instruction per term (IEEE arithmetic, no
+    /// fused multiply-add: the same bits on every path).
     fn eliminate_points(
         &mut self,
         lambda: f64,
-        s: &mut CameraSystem,
-        rhs: &mut DVector<f64>,
+        envelope: Option<&mut (EnvelopeMatrix, DVector<f64>)>,
+    ) -> Option<()> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the function only enables AVX-512 code generation for safe code; the CPU
+            // supports AVX-512F, checked on the line above.
+            return unsafe { self.eliminate_points_avx512(lambda, envelope) };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above, for AVX2.
+            return unsafe { self.eliminate_points_avx2(lambda, envelope) };
+        }
+        self.eliminate_points_impl(lambda, envelope)
+    }
+
+    /// [`BaSolver::eliminate_points_impl`] built for AVX-512. Call only on a CPU with AVX-512F.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn eliminate_points_avx512(
+        &mut self,
+        lambda: f64,
+        envelope: Option<&mut (EnvelopeMatrix, DVector<f64>)>,
+    ) -> Option<()> {
+        self.eliminate_points_impl(lambda, envelope)
+    }
+
+    /// [`BaSolver::eliminate_points_impl`] built for AVX2. Call only on a CPU with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn eliminate_points_avx2(
+        &mut self,
+        lambda: f64,
+        envelope: Option<&mut (EnvelopeMatrix, DVector<f64>)>,
+    ) -> Option<()> {
+        self.eliminate_points_impl(lambda, envelope)
+    }
+
+    /// The body of [`BaSolver::eliminate_points`].
+    #[inline(always)]
+    fn eliminate_points_impl(
+        &mut self,
+        lambda: f64,
+        mut envelope: Option<&mut (EnvelopeMatrix, DVector<f64>)>,
     ) -> Option<()> {
         let n_points = self.points.len();
+        // The damped point blocks' inverses first, all of them: independent of each other, so
+        // their square roots and divisions overlap (between the pair updates of two points they
+        // would each be one long wait).
         for j in 0..n_points {
-            let range = self.point_start[j]..self.point_start[j + 1];
-            if range.is_empty() {
+            if self.point_start[j] == self.point_start[j + 1] {
                 continue;
             }
             let vj = &self.v[j];
             let max_diag = vj[(0, 0)].max(vj[(1, 1)]).max(vj[(2, 2)]);
             self.damping[j] = lambda + POINT_DAMPING * max_diag + POINT_DAMPING_MIN;
-            let inv = (vj + Matrix3::identity() * self.damping[j])
-                .cholesky()?
-                .inverse();
-            self.v_inv[j] = inv;
+            self.v_inv[j] = cholesky_inverse3(&(vj + Matrix3::identity() * self.damping[j]))?;
+        }
+        for j in 0..n_points {
+            let range = self.point_start[j]..self.point_start[j + 1];
+            if range.is_empty() {
+                continue;
+            }
+            let inv = self.v_inv[j];
             // The point's observations by free keyframes: (variable, entry of point_obs).
             self.free.clear();
             self.free
                 .extend(range.filter_map(|k| Some((self.obs_var[k]?, k))));
-            for (n_a, &(ia, a)) in self.free.iter().enumerate() {
-                let y_a = mul(&self.w[a], &inv);
-                let r = mul(&y_a, &self.gp[j]);
-                let mut seg = rhs.fixed_rows_mut::<6>(6 * ia);
-                seg -= r;
-                for &(ib, b) in &self.free[n_a..] {
-                    s.subtract_pair(ia, ib, a == b, &y_a, &self.w[b]);
+            self.y.clear();
+            for &(_, a) in &self.free {
+                self.y.push(self.w[a].mul3(&inv));
+            }
+            let gp = &self.gp[j];
+            for (n_a, (&(ia, a), y_a)) in self.free.iter().zip(&self.y).enumerate() {
+                match envelope.as_deref_mut() {
+                    None => {
+                        sub_mul_vector(&mut self.rhs_lanes[ia], y_a, gp);
+                        for &(ib, b) in &self.free[n_a..] {
+                            self.packed.subtract_pair(ia, ib, a == b, y_a, &self.w[b]);
+                        }
+                    }
+                    Some((s, rhs)) => {
+                        let y_a = y_a.to_matrix();
+                        let r = mul(&y_a, gp);
+                        let mut seg = rhs.fixed_rows_mut::<6>(6 * ia);
+                        seg -= r;
+                        for &(ib, b) in &self.free[n_a..] {
+                            subtract_pair_envelope(s, ia, ib, a == b, &y_a, &self.w[b].to_matrix());
+                        }
+                    }
                 }
             }
         }
@@ -410,12 +492,18 @@ impl<'a> BaSolver<'a> {
     }
 }
 
-impl LmProblem for BaSolver<'_> {
-    fn cost(&self) -> f64 {
-        self.cost
+impl BaSolver<'_> {
+    /// [`LmProblem::linearize`] built for AVX2. Call only on a CPU with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn linearize_avx2(&mut self) -> Option<f64> {
+        self.linearize_impl()
     }
 
-    fn linearize(&mut self) -> Option<f64> {
+    /// The body of [`LmProblem::linearize`] (IEEE arithmetic without fused multiply-add on
+    /// every build: the same bits).
+    #[inline(always)]
+    fn linearize_impl(&mut self) -> Option<f64> {
         if self.point_obs.is_empty() {
             return None;
         }
@@ -423,31 +511,40 @@ impl LmProblem for BaSolver<'_> {
         self.u.iter_mut().for_each(|m| *m = Matrix6::zeros());
         self.gc.iter_mut().for_each(|g| *g = Vector6::zeros());
         for j in 0..self.points.len() {
-            let mut v = Matrix3::zeros();
-            let mut gp = Vector3::zeros();
-            for k in self.point_start[j]..self.point_start[j + 1] {
+            let range = self.point_start[j]..self.point_start[j + 1];
+            // First the residuals and their blocks in camera coordinates, observation by
+            // observation: these are independent, so the divisions and square roots of one
+            // overlap with those of the next instead of heading one long chain per observation.
+            self.lin.clear();
+            for k in range.clone() {
                 let o = &self.obs[self.point_obs[k]];
-                let pose = &rigid[o.keyframe];
-                let p_c = pose.transform(&self.points[j]);
+                let p_c = rigid[o.keyframe].transform(&self.points[j]);
                 let (robust, delta) = (self.robust, o.measurement.huber_delta());
-                let Some(lin) =
+                let lin =
                     linearize_observation(self.camera, &o.measurement, o.inv_sigma2, &p_c, |c| {
                         kernel_weight(robust, delta, c)
-                    })
-                else {
-                    self.w[k] = Matrix6x3::zeros();
+                    });
+                self.lin.push((p_c, lin));
+            }
+            // Then the blocks of the normal equations, accumulated in the same order as ever.
+            let mut v = Matrix3::zeros();
+            let mut gp = Vector3::zeros();
+            for (k, &(p_c, lin)) in range.zip(&self.lin) {
+                let o = &self.obs[self.point_obs[k]];
+                let pose = &rigid[o.keyframe];
+                let Some(lin) = lin else {
+                    self.w[k] = Padded6x3::ZERO;
                     continue;
                 };
                 let m_r = mul(&lin.jtj, &pose.r);
-                v += transpose_mul(&pose.r, &m_r);
+                add_transpose_mul_lower(&mut v, &pose.r, &m_r);
                 gp -= transpose_mul(&pose.r, &lin.jtr);
                 if let Some(var) = self.kf_var[o.keyframe] {
-                    self.u[var] +=
-                        left_jacobian_transpose_mul(&p_c, &mul_left_jacobian(&lin.jtj, &p_c));
+                    add_left_jacobian_quadratic_lower(&mut self.u[var], &lin.jtj, &p_c);
                     self.gc[var] -= left_jacobian_transpose_mul(&p_c, &lin.jtr);
-                    self.w[k] = left_jacobian_transpose_mul(&p_c, &m_r);
+                    self.w[k] = Padded6x3::from_matrix(&left_jacobian_transpose_mul(&p_c, &m_r));
                 } else {
-                    self.w[k] = Matrix6x3::zeros();
+                    self.w[k] = Padded6x3::ZERO;
                 }
             }
             self.v[j] = v;
@@ -465,39 +562,72 @@ impl LmProblem for BaSolver<'_> {
             .fold(0.0, f64::max);
         Some(cam_max.max(point_max))
     }
+}
+
+impl LmProblem for BaSolver<'_> {
+    fn cost(&self) -> f64 {
+        self.cost
+    }
+
+    fn linearize(&mut self) -> Option<f64> {
+        // The AVX2 build only: the AVX-512 one was measured 5 % slower (its wide shuffles of
+        // these small products cost more than they save).
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the function only enables AVX2 code generation for safe code; the CPU
+            // supports AVX2, checked on the line above.
+            return unsafe { self.linearize_avx2() };
+        }
+        self.linearize_impl()
+    }
 
     fn solve(&mut self, lambda: f64) -> Option<f64> {
         let n = self.n_var;
         let n_points = self.points.len();
-        let mut s = match &self.first_block {
+        let dc = match &self.first_block {
             None => {
-                let mut dense = std::mem::replace(&mut self.dense, DMatrix::zeros(0, 0));
-                if dense.nrows() == 6 * n {
-                    dense.fill(0.0);
-                } else {
-                    dense = DMatrix::zeros(6 * n, 6 * n);
+                self.packed.reset(n);
+                self.rhs_lanes.clear();
+                self.rhs_lanes.resize(n, Lanes::ZERO);
+                for i in 0..n {
+                    let block = self.u[i] + Matrix6::identity() * lambda;
+                    self.packed.set_diagonal_block(i, &block);
+                    self.rhs_lanes[i].0[..6].copy_from_slice(self.gc[i].as_slice());
                 }
-                CameraSystem::Dense(dense)
+                self.eliminate_points(lambda, None)?;
+                if self.dense.nrows() != 6 * n {
+                    self.dense = DMatrix::zeros(6 * n, 6 * n);
+                }
+                self.packed.unpack_lower(&mut self.dense);
+                if !cholesky_in_place(self.dense.as_mut_slice(), 6 * n) {
+                    return None;
+                }
+                let mut x = DVector::<f64>::zeros(6 * n);
+                for (i, lanes) in self.rhs_lanes.iter().enumerate() {
+                    x.as_mut_slice()[6 * i..6 * i + 6].copy_from_slice(&lanes.0[..6]);
+                }
+                cholesky_solve_in_place(self.dense.as_slice(), 6 * n, x.as_mut_slice());
+                x
             }
-            Some(first) => CameraSystem::Envelope(EnvelopeMatrix::zeros(
-                (0..6 * n).map(|row| 6 * first[row / 6]).collect(),
-            )),
+            Some(first) => {
+                let mut system = (
+                    EnvelopeMatrix::zeros((0..6 * n).map(|row| 6 * first[row / 6]).collect()),
+                    DVector::<f64>::zeros(6 * n),
+                );
+                for i in 0..n {
+                    let block = self.u[i] + Matrix6::identity() * lambda;
+                    system.0.add_diagonal_block6(i, &block);
+                    system.1.fixed_rows_mut::<6>(6 * i).copy_from(&self.gc[i]);
+                }
+                self.eliminate_points(lambda, Some(&mut system))?;
+                let (mut s, mut x) = system;
+                if !s.cholesky() {
+                    return None;
+                }
+                s.solve_in_place(x.as_mut_slice());
+                x
+            }
         };
-        let mut rhs = DVector::<f64>::zeros(6 * n);
-        for i in 0..n {
-            let block = self.u[i] + Matrix6::identity() * lambda;
-            s.set_diagonal_block(i, &block);
-            rhs.fixed_rows_mut::<6>(6 * i).copy_from(&self.gc[i]);
-        }
-        self.eliminate_points(lambda, &mut s, &mut rhs)?;
-        let dc = if n > 0 {
-            s.solve(rhs)?
-        } else {
-            DVector::zeros(0)
-        };
-        if let CameraSystem::Dense(factor) = s {
-            self.dense = factor;
-        }
         if !dc.iter().all(|x| x.is_finite()) {
             return None;
         }
@@ -522,7 +652,7 @@ impl LmProblem for BaSolver<'_> {
             for k in range {
                 if let Some(var) = self.obs_var[k] {
                     let d: Vector6 = dc.fixed_rows::<6>(6 * var).into_owned();
-                    r -= transpose_mul(&self.w[k], &d);
+                    r -= self.w[k].transpose_mul(&d);
                 }
             }
             let dp = mul(&self.v_inv[j], &r);
@@ -574,125 +704,28 @@ fn camera_coupling(problem: &BaProblem, kf_var: &[Option<usize>], n_var: usize) 
     Adjacency::from_edges(n_var, pairs)
 }
 
-/// The reduced camera system `S dx = rhs`: dense for a local window, an envelope matrix in
-/// reverse Cuthill-McKee order for a whole map.
-enum CameraSystem {
-    Dense(DMatrix<f64>),
-    Envelope(EnvelopeMatrix),
-}
-
-impl CameraSystem {
-    /// Sets the 6 x 6 diagonal block of free keyframe `i`.
-    fn set_diagonal_block(&mut self, i: usize, block: &Matrix6<f64>) {
-        match self {
-            CameraSystem::Dense(s) => s.fixed_view_mut::<6, 6>(6 * i, 6 * i).copy_from(block),
-            CameraSystem::Envelope(s) => s.add_diagonal_block6(i, block),
-        }
-    }
-
-    /// Subtracts one point's contribution `Y_a W_b^T` coupling keyframes `ia` and `ib` (and,
-    /// unless it is the same observation, its transpose). Only the lower triangle is kept: the
-    /// Cholesky factorizations read nothing else.
-    #[inline(always)]
-    fn subtract_pair(
-        &mut self,
-        ia: usize,
-        ib: usize,
-        same: bool,
-        y_a: &Matrix6x3<f64>,
-        w_b: &Matrix6x3<f64>,
-    ) {
-        match self {
-            CameraSystem::Dense(s) => subtract_pair_dense(s, ia, ib, same, y_a, w_b),
-            CameraSystem::Envelope(s) => {
-                let blk: Matrix6<f64> = mul_transpose(y_a, w_b);
-                if ia == ib {
-                    if same {
-                        s.sub_block6(ia, ia, &blk);
-                    } else {
-                        s.sub_block6(ia, ia, &(blk + blk.transpose()));
-                    }
-                } else if ia > ib {
-                    s.sub_block6(ia, ib, &blk);
-                } else {
-                    s.sub_block6(ib, ia, &blk.transpose());
-                }
-            }
-        }
-    }
-
-    /// The camera step, `None` when `S` is not positive definite.
-    /// The dense matrix is factorized in place (its storage is kept for the next solve).
-    fn solve(&mut self, rhs: DVector<f64>) -> Option<DVector<f64>> {
-        match self {
-            CameraSystem::Dense(s) => {
-                let chol = std::mem::replace(s, DMatrix::zeros(0, 0)).cholesky()?;
-                let x = chol.solve(&rhs);
-                *s = chol.unpack_dirty();
-                Some(x)
-            }
-            CameraSystem::Envelope(s) => {
-                if !s.cholesky() {
-                    return None;
-                }
-                let mut x = rhs;
-                s.solve_in_place(x.as_mut_slice());
-                Some(x)
-            }
-        }
-    }
-}
-
-/// [`CameraSystem::subtract_pair`] on the dense column-major matrix: the lower-triangle entries
-/// of `Y_a W_b^T` (block `(ia, ib)`) or of its transpose (block `(ib, ia)`), each entry
-/// `sum_k Y_a[r, k] W_b[c, k]` accumulated in nalgebra's order so the result is the product's.
+/// Subtracts one point's contribution `Y_a W_b^T` coupling keyframes `ia` and `ib` (and,
+/// unless it is the same observation, its transpose) from the envelope matrix (lower triangle).
 #[inline(always)]
-fn subtract_pair_dense(
-    s: &mut DMatrix<f64>,
+fn subtract_pair_envelope(
+    s: &mut EnvelopeMatrix,
     ia: usize,
     ib: usize,
     same: bool,
     y_a: &Matrix6x3<f64>,
     w_b: &Matrix6x3<f64>,
 ) {
-    let dim = s.nrows();
-    let data = s.as_mut_slice();
+    let blk: Matrix6<f64> = mul_transpose(y_a, w_b);
     if ia == ib {
-        let blk: Matrix6<f64> = mul_transpose(y_a, w_b);
-        for c in 0..6 {
-            let col = &mut data[(6 * ia + c) * dim + 6 * ia..][..6];
-            for r in c..6 {
-                col[r] -= if same {
-                    blk[(r, c)]
-                } else {
-                    blk[(r, c)] + blk[(c, r)]
-                };
-            }
+        if same {
+            s.sub_block6(ia, ia, &blk);
+        } else {
+            s.sub_block6(ia, ia, &(blk + blk.transpose()));
         }
     } else if ia > ib {
-        // Column 6 ib + c of S, rows 6 ia + r: entry (r, c) of the block.
-        for c in 0..6 {
-            let col = &mut data[(6 * ib + c) * dim + 6 * ia..][..6];
-            subtract_combination(col, y_a, [w_b[(c, 0)], w_b[(c, 1)], w_b[(c, 2)]]);
-        }
+        s.sub_block6(ia, ib, &blk);
     } else {
-        // Column 6 ia + r of S, rows 6 ib + c: entry (r, c) of the block, transposed.
-        for r in 0..6 {
-            let col = &mut data[(6 * ia + r) * dim + 6 * ib..][..6];
-            subtract_combination(col, w_b, [y_a[(r, 0)], y_a[(r, 1)], y_a[(r, 2)]]);
-        }
-    }
-}
-
-/// `col -= m s`: six entries, each `(m[i, 0] s[0] + m[i, 1] s[1]) + m[i, 2] s[2]` (the
-/// order of nalgebra's product), in a form the compiler turns into vector instructions.
-#[inline(always)]
-fn subtract_combination(col: &mut [f64], m: &Matrix6x3<f64>, s: [f64; 3]) {
-    let col: &mut [f64; 6] = col.try_into().expect("six rows");
-    let m = m.as_slice();
-    let (m0, m1, m2) = (&m[0..6], &m[6..12], &m[12..18]);
-    for i in 0..6 {
-        col[i] -= m0[i] * s[0] + m1[i] * s[1] + m2[i] * s[2];
+        s.sub_block6(ib, ia, &blk.transpose());
     }
 }
 

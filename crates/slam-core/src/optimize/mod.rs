@@ -8,6 +8,7 @@
 //! coordinates ([`Measurement`]), so a new residual such as the paper's 4-D AVC term plugs in
 //! through [`CameraResidual`] without touching the solvers.
 
+mod dense_cholesky;
 mod envelope;
 mod fixed_mul;
 mod lm;
@@ -15,6 +16,7 @@ mod local_ba;
 #[cfg(test)]
 pub(crate) mod numdiff;
 mod ordering;
+mod packed;
 mod pose_graph;
 mod pose_only;
 mod residual;

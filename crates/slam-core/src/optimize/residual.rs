@@ -121,38 +121,45 @@ impl Measurement {
         if p_c.z.is_nan() || p_c.z <= MIN_DEPTH {
             return None;
         }
-        let inv_z = 1.0 / p_c.z;
-        let x_z = p_c.x * inv_z;
-        let y_z = p_c.y * inv_z;
-        let pu = camera.fx * x_z + camera.cx;
-        let pv = camera.fy * y_z + camera.cy;
-        // d(u, v) / d p_c.
-        let du = [camera.fx * inv_z, 0.0, -camera.fx * x_z * inv_z];
-        let dv = [0.0, camera.fy * inv_z, -camera.fy * y_z * inv_z];
-        let mut block = ResidualBlock {
-            residual: Vector4::zeros(),
-            d_residual_d_point: Matrix4x3::zeros(),
-        };
-        let (u, v) = match self {
-            Measurement::Mono { u, v } => (*u, *v),
-            Measurement::Stereo { u, v, ur } => {
-                block.residual[2] = pu - camera.bf * inv_z - ur;
-                let dur = [du[0], 0.0, du[2] + camera.bf * inv_z * inv_z];
-                for (c, d) in dur.iter().enumerate() {
-                    block.d_residual_d_point[(2, c)] = *d;
-                }
-                (*u, *v)
-            }
+        let (r, j) = match self {
+            Measurement::Mono { u, v } => builtin_residual(camera, *u, *v, None, p_c),
+            Measurement::Stereo { u, v, ur } => builtin_residual(camera, *u, *v, Some(*ur), p_c),
             Measurement::Custom(c) => return c.evaluate(camera, p_c),
         };
-        block.residual[0] = pu - u;
-        block.residual[1] = pv - v;
-        for c in 0..3 {
-            block.d_residual_d_point[(0, c)] = du[c];
-            block.d_residual_d_point[(1, c)] = dv[c];
-        }
-        Some(block)
+        Some(ResidualBlock {
+            residual: Vector4::from(r),
+            d_residual_d_point: Matrix4x3::from_fn(|row, c| j[row][c]),
+        })
     }
+}
+
+/// The residual of a monocular (`ur` `None`) or stereo keypoint at `p_c` (in front of the
+/// camera) and its Jacobian by rows, padded with zeros to four rows, as plain arrays: the values
+/// of [`Measurement::evaluate`], which the linearization keeps in registers.
+#[inline(always)]
+fn builtin_residual(
+    camera: &Camera,
+    u: f64,
+    v: f64,
+    ur: Option<f64>,
+    p_c: &Vector3<f64>,
+) -> ([f64; 4], [[f64; 3]; 4]) {
+    let inv_z = 1.0 / p_c.z;
+    let x_z = p_c.x * inv_z;
+    let y_z = p_c.y * inv_z;
+    let pu = camera.fx * x_z + camera.cx;
+    let pv = camera.fy * y_z + camera.cy;
+    // d(u, v) / d p_c.
+    let du = [camera.fx * inv_z, 0.0, -camera.fx * x_z * inv_z];
+    let dv = [0.0, camera.fy * inv_z, -camera.fy * y_z * inv_z];
+    let (r2, dur) = match ur {
+        None => (0.0, [0.0; 3]),
+        Some(ur) => (
+            pu - camera.bf * inv_z - ur,
+            [du[0], 0.0, du[2] + camera.bf * inv_z * inv_z],
+        ),
+    };
+    ([pu - u, pv - v, r2, 0.0], [du, dv, dur, [0.0; 3]])
 }
 
 /// One observation reduced to what the normal equations need, in camera-point coordinates:
@@ -173,13 +180,20 @@ pub(crate) fn observation_chi2(
     inv_sigma2: f64,
     p_c: &Vector3<f64>,
 ) -> Option<f64> {
-    let block = measurement.evaluate(camera, p_c)?;
-    Some(inv_sigma2 * block.residual.norm_squared())
+    if p_c.z.is_nan() || p_c.z <= MIN_DEPTH {
+        return None;
+    }
+    let r = match measurement {
+        Measurement::Mono { u, v } => builtin_residual(camera, *u, *v, None, p_c).0,
+        Measurement::Stereo { u, v, ur } => builtin_residual(camera, *u, *v, Some(*ur), p_c).0,
+        Measurement::Custom(_) => measurement.evaluate(camera, p_c)?.residual.into(),
+    };
+    Some(inv_sigma2 * Vector4::from(r).norm_squared())
 }
 
 /// Linearizes one observation at `p_c`; `robust_weight` maps the raw chi2 to the IRLS weight
 /// (1 without a kernel).
-#[inline]
+#[inline(always)]
 pub(crate) fn linearize_observation(
     camera: &Camera,
     measurement: &Measurement,
@@ -187,14 +201,48 @@ pub(crate) fn linearize_observation(
     p_c: &Vector3<f64>,
     robust_weight: impl Fn(f64) -> f64,
 ) -> Option<PointLinearization> {
-    let block = measurement.evaluate(camera, p_c)?;
-    let chi2 = inv_sigma2 * block.residual.norm_squared();
+    if p_c.z.is_nan() || p_c.z <= MIN_DEPTH {
+        return None;
+    }
+    // The built-in residuals without the detour through a `ResidualBlock` in memory.
+    let (r, j) = match measurement {
+        Measurement::Mono { u, v } => builtin_residual(camera, *u, *v, None, p_c),
+        Measurement::Stereo { u, v, ur } => builtin_residual(camera, *u, *v, Some(*ur), p_c),
+        Measurement::Custom(_) => {
+            let block = measurement.evaluate(camera, p_c)?;
+            let chi2 = inv_sigma2 * block.residual.norm_squared();
+            let w = inv_sigma2 * robust_weight(chi2);
+            let j = &block.d_residual_d_point;
+            return Some(PointLinearization {
+                jtj: transpose_mul(j, j) * w,
+                jtr: transpose_mul(j, &block.residual) * w,
+            });
+        }
+    };
+    // The same operations as the custom path: nalgebra's `norm_squared` of a 4-vector is
+    // `0 + ((r0^2 + r2^2) + (r1^2 + r3^2))`, and each entry of `J^T J` (symmetric: its two
+    // triangles are the same products in the same order) and of `J^T r` sums its four rows in
+    // order before the weight.
+    let chi2 = inv_sigma2 * Vector4::from(r).norm_squared();
     let w = inv_sigma2 * robust_weight(chi2);
-    let j = &block.d_residual_d_point;
-    Some(PointLinearization {
-        jtj: transpose_mul(j, j) * w,
-        jtr: transpose_mul(j, &block.residual) * w,
-    })
+    let mut jtj = Matrix3::zeros();
+    let mut jtr = Vector3::zeros();
+    for a in 0..3 {
+        for b in 0..=a {
+            let mut s = j[0][a] * j[0][b];
+            for row in &j[1..] {
+                s += row[a] * row[b];
+            }
+            jtj[(a, b)] = s * w;
+            jtj[(b, a)] = s * w;
+        }
+        let mut s = j[0][a] * r[0];
+        for (row, ri) in j[1..].iter().zip(&r[1..]) {
+            s += row[a] * ri;
+        }
+        jtr[a] = s * w;
+    }
+    Some(PointLinearization { jtj, jtr })
 }
 
 #[cfg(test)]
