@@ -194,6 +194,35 @@ mod tests {
     }
 
     #[test]
+    fn the_cluster_reading_and_the_rigid_consensus_are_read_from_the_file() {
+        let p = file("frames", "[mcor]\ncluster_views = \"every-frame\"\n");
+        let c = overlay_file(&Config::default(), &p).unwrap();
+        assert_eq!(config_name(&c), "mcor-frames");
+        let p = file("rc", "[rc]\nhypotheses = 32\n");
+        let c = overlay_file(&Config::default(), &p).unwrap();
+        assert_eq!(config_name(&c), "rc");
+        assert_eq!(c.rc.as_ref().unwrap().hypotheses, 32);
+        assert_eq!(
+            c.rc.unwrap().weight_cap,
+            RigidConsensusParams::default().weight_cap
+        );
+        let p = file("badview", "[mcor]\ncluster_views = \"sometimes\"\n");
+        let e = format!("{:#}", overlay_file(&Config::default(), &p).unwrap_err());
+        assert!(e.contains("badview.toml"), "{e}");
+        // The command line's switch overrides the file's reading.
+        let c = apply_switches(
+            Config::default(),
+            Switches {
+                mcor_cluster: Some(ClusterViews::EveryFrame),
+                rc: true,
+                ..Switches::default()
+            },
+        );
+        assert_eq!(config_name(&c), "rc+mcor");
+        assert_eq!(c.mcor.unwrap().cluster_views, ClusterViews::EveryFrame);
+    }
+
+    #[test]
     fn a_subset_overlays_the_defaults() {
         let p = file(
             "subset",

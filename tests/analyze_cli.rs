@@ -120,6 +120,50 @@ fn outliers_writes_counts_and_figures() {
 }
 
 #[test]
+fn outliers_of_the_rigid_consensus_keep_fewer_matches_on_people() {
+    let d = tmpdir("out-rc");
+    let out = noisefree(&[
+        "analyze",
+        "outliers",
+        "--preset",
+        "walking",
+        "--frames",
+        "40",
+        "--technique",
+        "rc",
+        "--quiet",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let md = std::fs::read_to_string(d.join("outliers_walking_rc.md")).unwrap();
+    assert!(d.join("fig8_walking_rc.png").exists() && d.join("outliers_walking_rc.csv").exists());
+    // "matches on moving objects kept as inliers", baseline and rigid consensus.
+    let kept = |run: &str| -> f64 {
+        let row = md
+            .lines()
+            .skip_while(|l| !l.starts_with("## What the matches were"))
+            .find(|l| l.starts_with(&format!("| {run} |")))
+            .unwrap_or_else(|| panic!("{md}"));
+        row.split('|')
+            .nth(4)
+            .unwrap()
+            .split('%')
+            .next()
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap()
+    };
+    let (orb, rc) = (kept("ORB-SLAM2"), kept("rigid consensus"));
+    assert!(
+        orb > 30.0 && rc < orb / 4.0,
+        "people matches kept: orb {orb} %, rc {rc} %"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
 fn bad_arguments_fail_cleanly() {
     let d = tmpdir("bad");
     let out = noisefree(&[

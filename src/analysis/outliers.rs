@@ -153,25 +153,21 @@ fn ate_of(system: &System, gt: &Trajectory) -> Option<f64> {
         .map(|a| a.stats.rmse)
 }
 
-/// Runs `config` without and with MC-OR (`mcor`, default thresholds when `None` in the config)
-/// over frames 0..n of `generator`, both systems side by side on the same rendered frames.
-/// Fig. 7 shows frame `fig7_frame` if given, else the frame with most MC-OR rejections.
+/// Runs `base_config` (the baseline) and `technique_config` (MC-OR, or another gate; the
+/// `mcor` fields of [`OutlierData`] hold its run) over frames 0..n of `generator`, both
+/// systems side by side on the same rendered frames. Fig. 7 shows frame `fig7_frame` if given,
+/// else the frame with most MC-OR rejections.
 pub fn collect(
     generator: &Generator,
     n: usize,
-    config: &Config,
+    base_config: &Config,
+    technique_config: &Config,
     fig7_frame: Option<usize>,
     mut progress: impl FnMut(usize),
 ) -> OutlierData {
     let camera = generator.camera();
-    let base_config = Config {
-        mcor: None,
-        ..config.clone()
-    };
-    let mcor_config = Config {
-        mcor: Some(config.mcor.clone().unwrap_or_default()),
-        ..config.clone()
-    };
+    let base_config = base_config.clone();
+    let mcor_config = technique_config.clone();
     // The built-in vocabulary, as `noisefree run` uses by default.
     let voc = crate::vocab_file::default_vocabulary();
     let mut baseline = System::with_vocabulary(camera.clone(), base_config, voc.clone());

@@ -17,6 +17,7 @@ use crate::analysis::outliers::{self, error_summary, mean_tracked, OutlierData};
 use crate::config_file::{apply_switches, base_config, Switches};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::write_atomic;
+use slam_core::system::{ClusterViews, Config, McorParams};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use synth::Generator;
@@ -86,6 +87,35 @@ pub struct OutlierArgs {
     /// Frame drawn for Fig. 7 [default: the one with most MC-OR rejections].
     #[arg(long, value_name = "N")]
     pub frame: Option<usize>,
+    /// What runs beside the baseline: `mcor` (the paper's MC-OR, keyframe clusters),
+    /// `mcor-frames` (MC-OR with every-frame clusters) or `rc` (noisefree's rigid consensus).
+    /// Outputs of a technique other than `mcor` carry its name (`outliers_P_rc.csv`, ...).
+    #[arg(long, default_value = "mcor", value_parser = ["mcor", "mcor-frames", "rc"])]
+    pub technique: String,
+}
+
+/// The technique `analyze outliers` runs beside the baseline: its configuration, its label in
+/// tables and figures, and the suffix of its output files.
+fn technique(name: &str, base: &Config) -> (Config, &'static str, String) {
+    let mut c = base.clone();
+    match name {
+        "mcor-frames" => {
+            c.mcor = Some(McorParams {
+                cluster_views: ClusterViews::EveryFrame,
+                ..base.mcor.clone().unwrap_or_default()
+            });
+            (c, "w/ MC-OR (every frame)", "_mcor-frames".into())
+        }
+        "rc" => {
+            c.mcor = None;
+            c.rc = Some(base.rc.clone().unwrap_or_default());
+            (c, "rigid consensus", "_rc".into())
+        }
+        _ => {
+            c.mcor = Some(base.mcor.clone().unwrap_or_default());
+            (c, "w/ MC-OR", String::new())
+        }
+    }
 }
 
 /// Runs `noisefree analyze`.
@@ -269,22 +299,29 @@ fn run_outliers(args: OutlierArgs) -> Result<()> {
             bail!("--frame {k} is not a frame of the {} generated", seq.frames);
         }
     }
-    let config = base_config(generator.camera().sensor);
-    let data = outliers::collect(
+    let base = base_config(generator.camera().sensor);
+    let (config, label, suffix) = technique(&args.technique, &base);
+    let mut data = outliers::collect(
         &generator,
         seq.frames,
+        &base,
         &config,
         args.frame,
         progress(seq.quiet, seq.frames, "outliers"),
     );
+    if config.mcor.is_none() {
+        // Fig. 7 and the verdict truth show MC-OR's verdicts; a technique without MC-OR has
+        // none to show (its rejections are in the association table).
+        data.fig7 = None;
+    }
+    let p = &format!("{}{suffix}", seq.preset);
     std::fs::create_dir_all(&seq.out).with_context(|| format!("creating {}", seq.out.display()))?;
-    let p = &seq.preset;
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in outliers::rows(&data) {
         w.serialize(r)?;
     }
     write(&seq.out.join(format!("outliers_{p}.csv")), &w.into_inner()?)?;
-    fig8(&seq.out.join(format!("fig8_{p}")), p, &data)?;
+    fig8(&seq.out.join(format!("fig8_{p}")), p, &data, label)?;
     let fig7_note = match &data.fig7 {
         Some(f) => {
             let n_kept = f.features.len() - f.n_rejected();
@@ -305,15 +342,16 @@ fn run_outliers(args: OutlierArgs) -> Result<()> {
                 f.n_rejected()
             )
         }
+        None if config.mcor.is_none() => "Fig. 7: drawn for MC-OR only.".to_string(),
         None => "Fig. 7: no tracked frame to draw.".to_string(),
     };
-    let md = outliers_markdown(seq, &data, &fig7_note);
+    let md = outliers_markdown(seq, p, &args.technique, label, &data, &fig7_note);
     write(&seq.out.join(format!("outliers_{p}.md")), md.as_bytes())?;
     print!("{md}");
     Ok(())
 }
 
-fn fig8(stem: &Path, preset: &str, data: &OutlierData) -> Result<()> {
+fn fig8(stem: &Path, preset: &str, data: &OutlierData, label: &str) -> Result<()> {
     let series = |s: &[slam_core::system::FrameStats],
                   f: fn(&slam_core::system::FrameStats) -> usize| {
         s.iter().map(|x| f(x) as f64).collect::<Vec<f64>>()
@@ -328,7 +366,7 @@ fn fig8(stem: &Path, preset: &str, data: &OutlierData) -> Result<()> {
                 thin: false,
             },
             Curve {
-                label: "w/ MC-OR".into(),
+                label: label.into(),
                 color: MCOR_COLOR,
                 values: series(&data.mcor, |s| s.n_inliers),
                 thin: false,
@@ -345,21 +383,28 @@ fn fig8(stem: &Path, preset: &str, data: &OutlierData) -> Result<()> {
                 thin: false,
             },
             Curve {
-                label: "w/ MC-OR (all)".into(),
+                label: format!("{label} (all)"),
                 color: MCOR_COLOR,
                 values: series(&data.mcor, |s| s.n_outliers),
                 thin: false,
             },
-            Curve {
-                label: "w/ MC-OR: rejected by MC-OR".into(),
-                color: REJECTED_COLOR,
-                values: series(&data.mcor, |s| {
-                    s.n_mcor_rejected_clusters + s.n_mcor_rejected_features
-                }),
-                thin: true,
-            },
         ],
     };
+    let mut outliers = outliers;
+    if data
+        .mcor
+        .iter()
+        .any(|s| s.n_mcor_rejected_clusters + s.n_mcor_rejected_features > 0)
+    {
+        outliers.curves.push(Curve {
+            label: format!("{label}: rejected by MC-OR"),
+            color: REJECTED_COLOR,
+            values: series(&data.mcor, |s| {
+                s.n_mcor_rejected_clusters + s.n_mcor_rejected_features
+            }),
+            thin: true,
+        });
+    }
     let mut inliers = inliers;
     if data.runs.0.moving_inliers.iter().any(|n| *n > 0) {
         inliers.curves.push(Curve {
@@ -390,7 +435,7 @@ fn fig8(stem: &Path, preset: &str, data: &OutlierData) -> Result<()> {
                 thin: false,
             },
             Curve {
-                label: "w/ MC-OR".into(),
+                label: label.into(),
                 color: MCOR_COLOR,
                 values: centimetres(&data.runs.1.position_errors),
                 thin: false,
@@ -404,20 +449,27 @@ fn fig8(stem: &Path, preset: &str, data: &OutlierData) -> Result<()> {
     )
 }
 
-fn outliers_markdown(seq: &SequenceArgs, data: &OutlierData, fig7_note: &str) -> String {
-    let p = &seq.preset;
+fn outliers_markdown(
+    seq: &SequenceArgs,
+    p: &str,
+    technique: &str,
+    label: &str,
+    data: &OutlierData,
+    fig7_note: &str,
+) -> String {
+    let preset = &seq.preset;
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "# Outliers with and without MC-OR on synthetic `{p}` (synth seed {}, {} frames)\n",
+        "# Outliers of ORB-SLAM2 and {label} on synthetic `{preset}` (synth seed {}, {} frames)\n",
         seq.synth_seed, seq.frames
     );
     let _ = writeln!(
         s,
-        "Generated by `noisefree analyze outliers --preset {p} --frames {} --synth-seed {}`. \
-         Counts are of each frame's final pose optimization (local-map tracking); an MC-OR \
-         run's outliers include the matches MC-OR excluded. Per-frame data: `outliers_{p}.csv`; \
-         Fig. 8: `fig8_{p}.png` / `.svg`.\n",
+        "Generated by `noisefree analyze outliers --preset {preset} --frames {} --synth-seed {} \
+         --technique {technique}`. Counts are of each frame's final pose optimization (local-map \
+         tracking); a gated run's outliers include the matches its gate excluded. Per-frame \
+         data: `outliers_{p}.csv`; Fig. 8: `fig8_{p}.png` / `.svg`.\n",
         seq.frames, seq.synth_seed
     );
     let ate = |x: Option<f64>| x.map_or("F".to_string(), |v| format!("{v:.4}"));
@@ -428,7 +480,7 @@ fn outliers_markdown(seq: &SequenceArgs, data: &OutlierData, fig7_note: &str) ->
     );
     for (name, st, a) in [
         ("ORB-SLAM2", &data.baseline, data.ate.0),
-        ("w/ MC-OR", &data.mcor, data.ate.1),
+        (label, &data.mcor, data.ate.1),
     ] {
         let _ = writeln!(
             s,
@@ -442,7 +494,11 @@ fn outliers_markdown(seq: &SequenceArgs, data: &OutlierData, fig7_note: &str) ->
             ate(a)
         );
     }
-    association_markdown(&mut s, data);
+    association_markdown(&mut s, data, label);
+    if technique == "rc" {
+        let _ = writeln!(s, "\n{fig7_note}");
+        return s;
+    }
     let t = &data.truth;
     let th = 0.05;
     s.push_str(
@@ -488,7 +544,7 @@ fn outliers_markdown(seq: &SequenceArgs, data: &OutlierData, fig7_note: &str) ->
 }
 
 /// The section on what the matches were (ground truth) and where the cameras were.
-fn association_markdown(s: &mut String, data: &OutlierData) {
+fn association_markdown(s: &mut String, data: &OutlierData, label: &str) {
     use crate::analysis::association::Association::{Correct, Moving, Unknown, Wrong};
     s.push_str(
         "\n## What the matches were (ground truth)\n\nEvery match of every tracked frame's final \
@@ -498,9 +554,9 @@ fn association_markdown(s: &mut String, data: &OutlierData) {
          3-D), *mismatch* otherwise, *moving* when either lies on a moving object, *unknown* \
          without true depth. Position error: distance of the estimated camera centre from the \
          true one (the system's world is its first camera), over tracked frames.\n\n\
-         | run | inliers: correct / mismatch / moving / unknown | outliers: correct / mismatch / moving / unknown | position error mean / max (m) |\n|---|---|---|---|\n",
+         | run | inliers: correct / mismatch / moving / unknown | outliers: correct / mismatch / moving / unknown | matches on moving objects kept as inliers | position error mean / max (m) |\n|---|---|---|---|---|\n",
     );
-    for (name, run) in [("ORB-SLAM2", &data.runs.0), ("w/ MC-OR", &data.runs.1)] {
+    for (name, run) in [("ORB-SLAM2", &data.runs.0), (label, &data.runs.1)] {
         let c = &run.associations;
         let split = |inlier: bool| {
             let total = c.total(inlier).max(1) as f64;
@@ -514,11 +570,14 @@ fn association_markdown(s: &mut String, data: &OutlierData) {
         let errors: Vec<f64> = run.position_errors.iter().flatten().copied().collect();
         let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
         let max = errors.iter().copied().fold(0.0, f64::max);
+        let (kept, dropped) = (c.get(true, Moving), c.get(false, Moving));
         let _ = writeln!(
             s,
-            "| {name} | {} | {} | {mean:.3} / {max:.3} |",
+            "| {name} | {} | {} | {:.1} % ({kept} of {}) | {mean:.3} / {max:.3} |",
             split(true),
-            split(false)
+            split(false),
+            100.0 * kept as f64 / (kept + dropped).max(1) as f64,
+            kept + dropped
         );
     }
 }
