@@ -41,7 +41,8 @@ pub struct SweepArgs {
     /// Every synthetic preset of the catalog.
     #[arg(long = "all-synthetic")]
     pub all_synthetic: bool,
-    /// Configurations: orb, mcor, avc, mcor+avc (comma-separated).
+    /// Configurations, comma-separated: the paper's orb, mcor, avc, mcor+avc; MC-OR with
+    /// every-frame clusters, mcor-frames and mcor-frames+avc; noisefree's rigid consensus, rc.
     #[arg(long, default_value = "orb,mcor,avc,mcor+avc", value_name = "LIST")]
     pub configs: String,
     /// MC-OR tau_MF values in metres: a list `0.1,0.3` or a range `start:stop:step`.
