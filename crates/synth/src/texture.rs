@@ -62,7 +62,9 @@ fn random_colour(rng: &mut ChaCha8Rng) -> [u8; 3] {
     [c(0), c(1), c(2)]
 }
 
-/// Recursive random split of a rectangle into tiles between `min` and `max` metres wide.
+/// Recursive random split of a rectangle into tiles between `min` and `max` metres wide;
+/// `leaf(rng, x, y, w, h)` runs on each tile as the recursion reaches it (so a leaf that draws
+/// from `rng` interleaves its draws with the splits).
 #[allow(clippy::too_many_arguments)]
 fn split_tiles(
     rng: &mut ChaCha8Rng,
@@ -72,20 +74,20 @@ fn split_tiles(
     h: f64,
     min: f64,
     max: f64,
-    out: &mut Vec<(f64, f64, f64, f64)>,
+    leaf: &mut impl FnMut(&mut ChaCha8Rng, f64, f64, f64, f64),
 ) {
     let split_x = w > max || (w > 2.0 * min && rng.random_bool(0.5) && w >= h);
     let split_y = h > max || (h > 2.0 * min && rng.random_bool(0.5));
     if split_x && w > 2.0 * min {
         let f = rng.random_range(0.3..0.7);
-        split_tiles(rng, x, y, w * f, h, min, max, out);
-        split_tiles(rng, x + w * f, y, w * (1.0 - f), h, min, max, out);
+        split_tiles(rng, x, y, w * f, h, min, max, leaf);
+        split_tiles(rng, x + w * f, y, w * (1.0 - f), h, min, max, leaf);
     } else if split_y && h > 2.0 * min {
         let f = rng.random_range(0.3..0.7);
-        split_tiles(rng, x, y, w, h * f, min, max, out);
-        split_tiles(rng, x, y + h * f, w, h * (1.0 - f), min, max, out);
+        split_tiles(rng, x, y, w, h * f, min, max, leaf);
+        split_tiles(rng, x, y + h * f, w, h * (1.0 - f), min, max, leaf);
     } else {
-        out.push((x, y, w, h));
+        leaf(rng, x, y, w, h);
     }
 }
 
@@ -216,7 +218,16 @@ impl Texture {
         ];
         let hl = 0.299 * hue[0] + 0.587 * hue[1] + 0.114 * hue[2];
         let mut tiles = Vec::new();
-        split_tiles(rng, 0.0, 0.0, wm, hm, tile.0, tile.1, &mut tiles);
+        split_tiles(
+            rng,
+            0.0,
+            0.0,
+            wm,
+            hm,
+            tile.0,
+            tile.1,
+            &mut |_, x, y, w, h| tiles.push((x, y, w, h)),
+        );
         for (x, y, w, h) in tiles {
             let lum = paint[0] + rng.random_range(-contrast..=contrast);
             let amp = paint[1] * lum.min(255.0 - lum).max(20.0);
@@ -301,20 +312,10 @@ impl Texture {
         min: f64,
         max: f64,
     ) {
-        let split_x = w > max || (w > 2.0 * min && rng.random_bool(0.5) && w >= h);
-        let split_y = h > max || (h > 2.0 * min && rng.random_bool(0.5));
-        if split_x && w > 2.0 * min {
-            let f = rng.random_range(0.3..0.7);
-            self.patchwork(rng, x, y, w * f, h, min, max);
-            self.patchwork(rng, x + w * f, y, w * (1.0 - f), h, min, max);
-        } else if split_y && h > 2.0 * min {
-            let f = rng.random_range(0.3..0.7);
-            self.patchwork(rng, x, y, w, h * f, min, max);
-            self.patchwork(rng, x, y + h * f, w, h * (1.0 - f), min, max);
-        } else {
+        split_tiles(rng, x, y, w, h, min, max, &mut |rng, x, y, w, h| {
             let c = random_colour(rng);
             self.fill_rect(x, y, x + w, y + h, c);
-        }
+        });
     }
 
     /// Wood-like streaks: thin random horizontal bands of nearby brown tones.

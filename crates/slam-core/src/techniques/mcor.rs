@@ -180,13 +180,7 @@ impl McorCluster {
             *f = feature;
             return;
         }
-        if self.recent.len() == MCOR_CLUSTER_CAPACITY {
-            if let Some(old) = self.recent.pop_front() {
-                self.folded_sum += old.point_world;
-                self.folded_count += 1;
-            }
-        }
-        self.recent.push_back(feature);
+        self.push_distinct(feature);
     }
 
     /// Adds a feature whose `source` the caller knows is not in the ring (no search); when the
