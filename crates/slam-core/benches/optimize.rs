@@ -1,17 +1,19 @@
 //! Benchmarks of the solvers at ORB-SLAM2's working sizes, single thread: pose-only
 //! optimization of a frame with 500 matches (10 % mismatches), local bundle adjustment of
-//! 20 keyframes / 2000 points / ~15k observations (60 % RGB-D, 40 % monocular keypoints), and,
+//! 20 keyframes / 2000 points / ~15k observations (60 % RGB-D, 40 % monocular keypoints) and of
+//! the wide window of a run that failed on moving people (120 mutually covisible keyframes,
+//! 6000 points tracked over up to 100 of them), and,
 //! for loop closing, the essential graph (20 iterations) and a global bundle adjustment (10
 //! iterations, robust) over a circuit of 400 keyframes that flies over its first quarter again
 //! (15k points on the walls of a room, feature tracks of 4-20 keyframes).
 //!
 //! Run: `flock /tmp/nf-cargo.lock cargo bench -p slam-core --bench optimize`.
 //!
-//! With `NF_BENCH_ONCE=local_ba` in the environment the benchmark binary instead solves the
-//! local BA problem once and prints a fingerprint of its result (every bit of the refined poses
-//! and points, the outliers and the costs), which makes a cheap bit-identity check and a short
-//! run to count instructions under `valgrind --tool=callgrind`; `NF_BENCH_REPEAT=n` times `n`
-//! runs before that and prints the fastest and the median.
+//! With `NF_BENCH_ONCE=local_ba` (or `local_ba_wide`) in the environment the benchmark binary
+//! instead solves that local BA problem once and prints a fingerprint of its result (every bit
+//! of the refined poses and points, the outliers and the costs), which makes a cheap
+//! bit-identity check and a short run to count instructions under `valgrind --tool=callgrind`;
+//! `NF_BENCH_REPEAT=n` times `n` runs before that and prints the fastest and the median.
 
 use criterion::{criterion_group, BatchSize, Criterion};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -109,9 +111,10 @@ fn pose_only_input(camera: &Camera) -> (Isometry3<f64>, Vec<PoseObservation>) {
     (perturb(&tcw, 0.03, 1f64.to_radians(), &mut rng), obs)
 }
 
-fn local_ba_input(camera: &Camera) -> BaProblem {
+/// A local BA window: `n_kf` keyframes along a 2 m line, looking ahead, and `n_points` points,
+/// each tracked over a run of 3..=`max_track` consecutive keyframes (noise on both).
+fn local_ba_input(camera: &Camera, n_kf: usize, n_points: usize, max_track: usize) -> BaProblem {
     let mut rng = ChaCha8Rng::seed_from_u64(2);
-    let n_kf = 20;
     let gt: Vec<Isometry3<f64>> = (0..n_kf)
         .map(|i| {
             let s = i as f64 / (n_kf - 1) as f64;
@@ -129,14 +132,14 @@ fn local_ba_input(camera: &Camera) -> BaProblem {
         })
         .collect();
     let mut problem = BaProblem::default();
-    while problem.points.len() < 2000 {
+    while problem.points.len() < n_points {
         let pw = Vector3::new(
             rng.random_range(-3.0..3.0),
             rng.random_range(-1.5..1.5),
             rng.random_range(2.0..6.0),
         );
-        // A track over a run of consecutive keyframes (3..=14, ~8.5 on average).
-        let len = rng.random_range(3..=14);
+        // A track over a run of consecutive keyframes (20 keyframes: 3..=14, ~8.5 on average).
+        let len = rng.random_range(3..=max_track);
         let start = rng.random_range(0..=n_kf - len);
         let j = problem.points.len();
         let before = problem.observations.len();
@@ -172,6 +175,17 @@ fn local_ba_input(camera: &Camera) -> BaProblem {
         })
         .collect();
     problem
+}
+
+/// Name of the wide-window local BA benchmark.
+const WIDE_WINDOW: &str = "120kf_6000pts_all_covisible";
+
+/// The window of a run whose tracking has failed on moving people: the camera hardly moves and
+/// inserts keyframe after keyframe, all of which see each other, so ORB-SLAM2's local window
+/// (every covisible keyframe) holds over a hundred of them and the reduced camera system is
+/// dense.
+fn wide_window_input(camera: &Camera) -> BaProblem {
+    local_ba_input(camera, 120, 6000, 100)
 }
 
 /// Keyframes of the circuit: 1.25 turns, so the last 80 fly over the first ones again.
@@ -304,23 +318,27 @@ fn bench_optimize(c: &mut Criterion) {
         b.iter(|| pose_optimization(&camera, &start, &obs, &cfg))
     });
 
-    let problem = local_ba_input(&camera);
-    eprintln!(
-        "local BA problem: {} keyframes, {} points, {} observations",
-        problem.keyframes.len(),
-        problem.points.len(),
-        problem.observations.len()
-    );
     let ba_cfg = BaConfig::default();
     let mut group = c.benchmark_group("local_ba");
     group.sample_size(20);
-    group.bench_function("20kf_2000pts", |b| {
-        b.iter_batched(
-            || problem.clone(),
-            |mut p| local_bundle_adjustment(&camera, &mut p, &ba_cfg),
-            BatchSize::LargeInput,
-        )
-    });
+    for (name, problem) in [
+        ("20kf_2000pts", local_ba_input(&camera, 20, 2000, 14)),
+        (WIDE_WINDOW, wide_window_input(&camera)),
+    ] {
+        eprintln!(
+            "local BA problem {name}: {} keyframes, {} points, {} observations",
+            problem.keyframes.len(),
+            problem.points.len(),
+            problem.observations.len()
+        );
+        group.bench_function(name, |b| {
+            b.iter_batched(
+                || problem.clone(),
+                |mut p| local_bundle_adjustment(&camera, &mut p, &ba_cfg),
+                BatchSize::LargeInput,
+            )
+        });
+    }
     group.finish();
 
     let (problem, graph) = circuit_input(&camera);
@@ -383,10 +401,15 @@ fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
     h
 }
 
-/// One local BA on the benchmark's problem; prints the fingerprint of its result.
-fn local_ba_once() {
+/// One local BA on a benchmark problem (`wide`: the 120-keyframe window); prints the fingerprint
+/// of its result.
+fn local_ba_once(wide: bool) {
     let camera = Camera::tum_fr3();
-    let input = local_ba_input(&camera);
+    let input = if wide {
+        wide_window_input(&camera)
+    } else {
+        local_ba_input(&camera, 20, 2000, 14)
+    };
     // NF_BENCH_REPEAT=n: also time n more runs and print the fastest and the median (robust to a
     // busy machine, unlike a mean).
     let repeat: usize = std::env::var("NF_BENCH_REPEAT")
@@ -440,8 +463,9 @@ criterion_group!(benches, bench_optimize);
 
 fn main() {
     match std::env::var("NF_BENCH_ONCE").as_deref() {
-        Ok("local_ba") => local_ba_once(),
-        Ok(other) => panic!("NF_BENCH_ONCE={other}: only local_ba runs once"),
+        Ok("local_ba") => local_ba_once(false),
+        Ok("local_ba_wide") => local_ba_once(true),
+        Ok(other) => panic!("NF_BENCH_ONCE={other}: only local_ba and local_ba_wide run once"),
         Err(_) => {
             benches();
             Criterion::default().configure_from_args().final_summary();

@@ -15,6 +15,9 @@ use nalgebra::Matrix3;
 /// Rows of a column updated together in [`cholesky_in_place`] (kept in registers over `k`).
 const CHUNK: usize = 8;
 
+/// Columns factored together in [`cholesky_in_place`] (a `CHUNK x GROUP` tile in registers).
+const GROUP: usize = 8;
+
 /// nalgebra's pivot test: a zero pivot fails, and so does one without a real square root
 /// (negative or NaN).
 #[inline(always)]
@@ -62,45 +65,98 @@ fn cholesky_in_place_avx2(a: &mut [f64], n: usize) -> bool {
 
 /// The body of [`cholesky_in_place`] (IEEE arithmetic without fused multiply-add on every
 /// build: the same bits).
+///
+/// Columns are factored in groups of [`GROUP`]. The rows below a group's diagonal block first
+/// take the terms of all finished columns in one pass that keeps a `CHUNK x GROUP` tile in
+/// registers, so each finished column is read once per group rather than once per column; the
+/// group's own columns are then finished one by one. Every entry still subtracts its terms one
+/// by one in increasing `k`, as nalgebra does: the order, and so the bits, are unchanged.
 #[inline(always)]
 fn cholesky_in_place_impl(a: &mut [f64], n: usize) -> bool {
-    for j in 0..n {
-        let (done, rest) = a.split_at_mut(j * n);
-        let col_j = &mut rest[..n];
-        // Entries (j..n, j) minus sum_k L[j, k] L[i, k], k ascending: nalgebra's
-        // `col_j.axpy(-L[j, k], col_k, 1)`, i.e. `(-L[j, k]) L[i, k] + a`, equals `a - L[j, k] L[i, k]`
-        // exactly (negation is exact and addition commutes).
-        let mut i0 = j;
-        while i0 + CHUNK <= n {
-            let mut acc: [f64; CHUNK] = col_j[i0..i0 + CHUNK].try_into().expect("chunk");
-            for k in 0..j {
-                let col_k = &done[k * n..k * n + n];
-                let f = col_k[j];
-                let x: &[f64; CHUNK] = col_k[i0..i0 + CHUNK].try_into().expect("chunk");
-                for l in 0..CHUNK {
-                    acc[l] -= f * x[l];
+    let mut j0 = 0;
+    while j0 < n {
+        let width = GROUP.min(n - j0);
+        let below = j0 + width;
+        // Rows `below..tiled` of the group's columns hold the terms k < j0 after this pass.
+        let mut tiled = below;
+        if width == GROUP && j0 > 0 {
+            let (done, rest) = a.split_at_mut(j0 * n);
+            while tiled + CHUNK <= n {
+                let i0 = tiled;
+                let mut acc = [[0.0f64; CHUNK]; GROUP];
+                for (c, acc_c) in acc.iter_mut().enumerate() {
+                    acc_c.copy_from_slice(&rest[c * n + i0..c * n + i0 + CHUNK]);
                 }
+                for k in 0..j0 {
+                    let col_k = &done[k * n..k * n + n];
+                    let f: &[f64; GROUP] = col_k[j0..j0 + GROUP].try_into().expect("group");
+                    let x: &[f64; CHUNK] = col_k[i0..i0 + CHUNK].try_into().expect("chunk");
+                    for c in 0..GROUP {
+                        for l in 0..CHUNK {
+                            acc[c][l] -= f[c] * x[l];
+                        }
+                    }
+                }
+                for (c, acc_c) in acc.iter().enumerate() {
+                    rest[c * n + i0..c * n + i0 + CHUNK].copy_from_slice(acc_c);
+                }
+                tiled += CHUNK;
             }
-            col_j[i0..i0 + CHUNK].copy_from_slice(&acc);
-            i0 += CHUNK;
         }
-        for i in i0..n {
-            let mut acc = col_j[i];
-            for k in 0..j {
-                let col_k = &done[k * n..k * n + n];
-                acc -= col_k[j] * col_k[i];
+        for j in j0..below {
+            let (done, rest) = a.split_at_mut(j * n);
+            let col_j = &mut rest[..n];
+            // Entries (i, j) minus sum_k L[j, k] L[i, k], k ascending: nalgebra's
+            // `col_j.axpy(-L[j, k], col_k, 1)`, i.e. `(-L[j, k]) L[i, k] + a`, equals
+            // `a - L[j, k] L[i, k]` exactly (negation is exact and addition commutes). Rows
+            // `below..tiled` already hold the terms k < j0.
+            let mut i0 = below;
+            while i0 + CHUNK <= tiled {
+                let mut acc: [f64; CHUNK] = col_j[i0..i0 + CHUNK].try_into().expect("chunk");
+                for k in j0..j {
+                    let col_k = &done[k * n..k * n + n];
+                    let f = col_k[j];
+                    let x: &[f64; CHUNK] = col_k[i0..i0 + CHUNK].try_into().expect("chunk");
+                    for l in 0..CHUNK {
+                        acc[l] -= f * x[l];
+                    }
+                }
+                col_j[i0..i0 + CHUNK].copy_from_slice(&acc);
+                i0 += CHUNK;
             }
-            col_j[i] = acc;
+            let mut i0 = tiled;
+            while i0 + CHUNK <= n {
+                let mut acc: [f64; CHUNK] = col_j[i0..i0 + CHUNK].try_into().expect("chunk");
+                for k in 0..j {
+                    let col_k = &done[k * n..k * n + n];
+                    let f = col_k[j];
+                    let x: &[f64; CHUNK] = col_k[i0..i0 + CHUNK].try_into().expect("chunk");
+                    for l in 0..CHUNK {
+                        acc[l] -= f * x[l];
+                    }
+                }
+                col_j[i0..i0 + CHUNK].copy_from_slice(&acc);
+                i0 += CHUNK;
+            }
+            for i in (j..below).chain(i0..n) {
+                let mut acc = col_j[i];
+                for k in 0..j {
+                    let col_k = &done[k * n..k * n + n];
+                    acc -= col_k[j] * col_k[i];
+                }
+                col_j[i] = acc;
+            }
+            let diag = col_j[j];
+            if !positive_pivot(diag) {
+                return false;
+            }
+            let denom = diag.sqrt();
+            col_j[j] = denom;
+            for x in &mut col_j[j + 1..] {
+                *x /= denom;
+            }
         }
-        let diag = col_j[j];
-        if !positive_pivot(diag) {
-            return false;
-        }
-        let denom = diag.sqrt();
-        col_j[j] = denom;
-        for x in &mut col_j[j + 1..] {
-            *x /= denom;
-        }
+        j0 = below;
     }
     true
 }
@@ -251,6 +307,9 @@ mod tests {
             (6, 17),
             (7, 54),
             (8, 114),
+            (9, 120),
+            (10, 203),
+            (11, 330),
         ] {
             let a = spd(n, seed);
             let mut r = rng(100 + seed);

@@ -4,7 +4,8 @@
 //!
 //! Sparse Levenberg-Marquardt: each point's 3x3 block is eliminated (Schur complement), the reduced
 //! camera system (6 x 6 blocks, one per free keyframe) is solved by Cholesky (dense for a local
-//! window; by its envelope in reverse Cuthill-McKee order for a global BA over many keyframes), and
+//! window, however many keyframes it holds when they all see each other; by its envelope in
+//! reverse Cuthill-McKee order for a global BA over a long circuit of keyframes), and
 //! the point steps are recovered by back-substitution. Two passes as in ORB-SLAM2: a robust pass
 //! (Huber, `first_pass_iterations`), then observations above their chi2 gate or behind their camera
 //! are excluded and the kernels dropped for `second_pass_iterations` more.
@@ -118,16 +119,32 @@ pub fn local_bundle_adjustment(
     problem: &mut BaProblem,
     cfg: &BaConfig,
 ) -> BaReport {
-    bundle_adjustment(camera, problem, cfg, ENVELOPE_MIN_KEYFRAMES)
+    bundle_adjustment(camera, problem, cfg, Storage::CHOSEN)
 }
 
-/// [`local_bundle_adjustment`] storing the reduced camera system by its envelope from
-/// `envelope_min` free keyframes on.
+/// When the reduced camera system is stored by its envelope rather than densely.
+#[derive(Clone, Copy, Debug)]
+struct Storage {
+    /// Free keyframes from which the envelope is considered.
+    envelope_min_keyframes: usize,
+    /// Share of the lower triangle (by 6 x 6 block) above which the envelope is not used.
+    envelope_max_fill: f64,
+}
+
+impl Storage {
+    /// noisefree's choice: [`ENVELOPE_MIN_KEYFRAMES`] and [`ENVELOPE_MAX_FILL`].
+    const CHOSEN: Storage = Storage {
+        envelope_min_keyframes: ENVELOPE_MIN_KEYFRAMES,
+        envelope_max_fill: ENVELOPE_MAX_FILL,
+    };
+}
+
+/// [`local_bundle_adjustment`] storing the reduced camera system as `storage` says.
 fn bundle_adjustment(
     camera: &Camera,
     problem: &mut BaProblem,
     cfg: &BaConfig,
-    envelope_min: usize,
+    storage: Storage,
 ) -> BaReport {
     for (i, o) in problem.observations.iter().enumerate() {
         assert!(
@@ -140,7 +157,7 @@ fn bundle_adjustment(
         );
     }
     let initial_chi2 = all_chi2(camera, problem);
-    let mut solver = BaSolver::new(camera, problem, envelope_min);
+    let mut solver = BaSolver::new(camera, problem, storage);
 
     let pass1: Vec<bool> = initial_chi2.iter().map(Option::is_some).collect();
     solver.set_active(&pass1, true);
@@ -273,7 +290,7 @@ struct BaSolver<'a> {
 }
 
 impl<'a> BaSolver<'a> {
-    fn new(camera: &'a Camera, problem: &'a BaProblem, envelope_min: usize) -> Self {
+    fn new(camera: &'a Camera, problem: &'a BaProblem, storage: Storage) -> Self {
         let mut n_var = 0;
         let mut kf_var: Vec<Option<usize>> = problem
             .keyframes
@@ -286,13 +303,16 @@ impl<'a> BaSolver<'a> {
             })
             .collect();
         let mut first_block = None;
-        if n_var >= envelope_min {
+        if n_var >= storage.envelope_min_keyframes {
             let coupling = camera_coupling(problem, &kf_var, n_var);
             let position = inverse_permutation(&coupling.reverse_cuthill_mckee());
-            for var in kf_var.iter_mut().flatten() {
-                *var = position[*var];
+            let first = coupling.envelope_first(&position);
+            if envelope_fill(&first) <= storage.envelope_max_fill {
+                for var in kf_var.iter_mut().flatten() {
+                    *var = position[*var];
+                }
+                first_block = Some(first);
             }
-            first_block = Some(coupling.envelope_first(&position));
         }
         let poses: Vec<Isometry3<f64>> = problem.keyframes.iter().map(|k| k.tcw).collect();
         let points: Vec<Vector3<f64>> = problem.points.iter().map(|p| p.position).collect();
@@ -678,10 +698,25 @@ impl LmProblem for BaSolver<'_> {
 }
 
 /// Free keyframes from which the reduced camera system is stored by its envelope, in reverse
-/// Cuthill-McKee order: a global BA over a map that came back to its start. Below, the dense
-/// factorization is cheap (local BA's window of covisible keyframes couples nearly every pair
-/// anyway) and local BA keeps its results bit for bit.
+/// Cuthill-McKee order, unless the envelope fills more than [`ENVELOPE_MAX_FILL`] of the matrix:
+/// a global BA over a map that came back to its start. Below, the dense factorization is cheap
+/// (local BA's window of covisible keyframes couples nearly every pair anyway) and local BA
+/// keeps its results bit for bit.
 const ENVELOPE_MIN_KEYFRAMES: usize = 64;
+
+/// Share of the lower triangle (by 6 x 6 block) above which an envelope is factored densely: when
+/// nearly every pair of keyframes is coupled, as in the local window of a run whose camera stood
+/// still while keyframes piled up, the envelope saves nothing and its row-wise factorisation is
+/// several times slower than the dense one.
+const ENVELOPE_MAX_FILL: f64 = 0.5;
+
+/// Share of the `n (n + 1) / 2` lower-triangle blocks inside the envelope whose row `i` starts at
+/// block column `first[i]`.
+fn envelope_fill(first: &[usize]) -> f64 {
+    let n = first.len();
+    let inside: usize = first.iter().enumerate().map(|(i, &f)| i - f + 1).sum();
+    inside as f64 / (n * (n + 1) / 2).max(1) as f64
+}
 
 /// Which free keyframes (by variable index) observe a common point: the sparsity pattern of
 /// the reduced camera system.
@@ -877,7 +912,7 @@ mod tests {
         let mut rng = test_scene::rng(21);
         let s = synthetic(3, 1, 15, 1.0, 0.1, (0.02, 0.01), 0.05, &mut rng);
         for robust in [true, false] {
-            let mut solver = BaSolver::new(&s.camera, &s.problem, ENVELOPE_MIN_KEYFRAMES);
+            let mut solver = BaSolver::new(&s.camera, &s.problem, Storage::CHOSEN);
             solver.set_active(&vec![true; s.problem.observations.len()], robust);
             solver.linearize().unwrap();
             let n_free = solver.n_var;
@@ -1018,6 +1053,45 @@ mod tests {
         );
     }
 
+    const ALWAYS_DENSE: Storage = Storage {
+        envelope_min_keyframes: usize::MAX,
+        envelope_max_fill: 1.0,
+    };
+    const ALWAYS_ENVELOPE: Storage = Storage {
+        envelope_min_keyframes: 0,
+        envelope_max_fill: f64::INFINITY,
+    };
+
+    #[test]
+    fn envelope_fill_counts_the_blocks_inside_the_envelope() {
+        assert_eq!(envelope_fill(&[0, 0, 0, 0]), 1.0);
+        assert_eq!(envelope_fill(&[0, 1, 2, 3]), 0.4);
+        // A band of width 2 over 5 blocks: 1 + 2 + 2 + 2 + 2 of 15.
+        assert_eq!(envelope_fill(&[0, 0, 1, 2, 3]), 9.0 / 15.0);
+        assert_eq!(envelope_fill(&[]), 0.0);
+    }
+
+    #[test]
+    fn a_window_of_mutually_covisible_keyframes_is_factored_densely() {
+        // 70 free keyframes that all see the same points: above the envelope's keyframe count,
+        // but every block pair is coupled, so the dense factorization is chosen; a band (each
+        // point seen by two neighbouring keyframes) keeps the envelope.
+        let mut rng = test_scene::rng(41);
+        let s = synthetic(71, 1, 200, 1.0, 0.0, (0.01, 0.01), 0.01, &mut rng);
+        let all_coupled = BaSolver::new(&s.camera, &s.problem, Storage::CHOSEN);
+        assert_eq!(all_coupled.n_var, 70);
+        assert!(all_coupled.first_block.is_none());
+        let mut band = s.problem.clone();
+        band.observations
+            .retain(|o| o.keyframe == o.point % 71 || o.keyframe == (o.point + 1) % 71);
+        let banded = BaSolver::new(&s.camera, &band, Storage::CHOSEN);
+        let first = banded
+            .first_block
+            .as_ref()
+            .expect("a band is stored by its envelope");
+        assert!(envelope_fill(first) < 0.1);
+    }
+
     #[test]
     fn the_envelope_solver_takes_the_dense_solver_s_steps() {
         // 12 keyframes (2 fixed) with 1 % mismatches: the same two passes, the same outliers and
@@ -1035,8 +1109,8 @@ mod tests {
         );
         let cfg = BaConfig::default();
         let (mut dense, mut envelope) = (s.problem.clone(), s.problem.clone());
-        let dense_report = bundle_adjustment(&s.camera, &mut dense, &cfg, usize::MAX);
-        let envelope_report = bundle_adjustment(&s.camera, &mut envelope, &cfg, 0);
+        let dense_report = bundle_adjustment(&s.camera, &mut dense, &cfg, ALWAYS_DENSE);
+        let envelope_report = bundle_adjustment(&s.camera, &mut envelope, &cfg, ALWAYS_ENVELOPE);
         assert_eq!(dense_report.iterations, envelope_report.iterations);
         assert_eq!(dense_report.outliers, envelope_report.outliers);
         let rel =
