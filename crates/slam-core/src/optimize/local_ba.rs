@@ -1063,6 +1063,50 @@ mod tests {
     };
 
     #[test]
+    fn results_on_a_fixed_problem_stay_those_pinned() {
+        // Issue 20 made local BA several times faster at the same results. A fixed problem
+        // (24 keyframes, 3 fixed, 700 points, 2 % mismatches, seed 51) pins them: the passes'
+        // iterations, the outliers and the final cost to 1e-9 relative, one pose and one point
+        // to 1e-9 m. Any change of the solver's arithmetic that moves a result beyond rounding
+        // fails here; update the pinned values only for an intended change of behaviour.
+        let mut rng = test_scene::rng(51);
+        let mut s = synthetic(
+            24,
+            3,
+            700,
+            1.0,
+            0.02,
+            (0.04, 1.5f64.to_radians()),
+            0.2,
+            &mut rng,
+        );
+        let report = local_bundle_adjustment(&s.camera, &mut s.problem, &BaConfig::default());
+        let outliers = report.outliers.iter().filter(|&&o| o).count();
+        let t = s.problem.keyframes[17].tcw.translation.vector;
+        let p = s.problem.points[123].position;
+        assert_eq!((report.iterations, outliers), (15, 891));
+        let pinned_cost = 2.831_327_157_455_035e4;
+        let rel = (report.final_cost - pinned_cost).abs() / pinned_cost;
+        assert!(
+            rel < 1e-9,
+            "final cost {} (pinned {pinned_cost})",
+            report.final_cost
+        );
+        let pinned_t = Vector3::new(
+            -2.364_107_243_172_541e-1,
+            1.672_416_844_651_557e-2,
+            -9.281_724_327_150_47e-2,
+        );
+        let pinned_p = Vector3::new(
+            -8.775_260_567_963_504e-1,
+            9.432_775_728_504_091e-1,
+            4.880_028_204_328_803,
+        );
+        assert!((t - pinned_t).norm() < 1e-9, "keyframe 17 at {t}");
+        assert!((p - pinned_p).norm() < 1e-9, "point 123 at {p}");
+    }
+
+    #[test]
     fn envelope_fill_counts_the_blocks_inside_the_envelope() {
         assert_eq!(envelope_fill(&[0, 0, 0, 0]), 1.0);
         assert_eq!(envelope_fill(&[0, 1, 2, 3]), 0.4);
