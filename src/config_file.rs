@@ -144,13 +144,14 @@ pub fn apply_switches(mut config: Config, s: Switches) -> Config {
     config
 }
 
-/// The configuration name of the tables' columns: `orb`, `mcor`, `avc` or `mcor+avc`, or
-/// `mcor-frames` / `mcor-frames+avc` for MC-OR's every-frame cluster reading.
+/// The configuration name of the tables' columns: `orb`, `mcor`, `avc` or `mcor+avc` (MC-OR
+/// with its default, every-frame cluster), or `mcor-keyframes` / `mcor-keyframes+avc` for
+/// MC-OR's keyframe cluster reading.
 pub fn config_name(c: &Config) -> &'static str {
-    let frames = c
+    let keyframes = c
         .mcor
         .as_ref()
-        .is_some_and(|m| m.cluster_views == ClusterViews::EveryFrame);
+        .is_some_and(|m| m.cluster_views == ClusterViews::Keyframes);
     if c.rc.is_some() {
         return match (c.mcor.is_some(), c.avc.is_some()) {
             (false, false) => "rc",
@@ -159,13 +160,13 @@ pub fn config_name(c: &Config) -> &'static str {
             (true, true) => "rc+mcor+avc",
         };
     }
-    match (c.mcor.is_some(), c.avc.is_some(), frames) {
+    match (c.mcor.is_some(), c.avc.is_some(), keyframes) {
         (false, false, _) => "orb",
         (true, false, false) => "mcor",
         (false, true, _) => "avc",
         (true, true, false) => "mcor+avc",
-        (true, false, true) => "mcor-frames",
-        (true, true, true) => "mcor-frames+avc",
+        (true, false, true) => "mcor-keyframes",
+        (true, true, true) => "mcor-keyframes+avc",
     }
 }
 
@@ -197,7 +198,11 @@ mod tests {
     fn the_cluster_reading_and_the_rigid_consensus_are_read_from_the_file() {
         let p = file("frames", "[mcor]\ncluster_views = \"every-frame\"\n");
         let c = overlay_file(&Config::default(), &p).unwrap();
-        assert_eq!(config_name(&c), "mcor-frames");
+        assert_eq!(config_name(&c), "mcor");
+        let p = file("keyframes", "[mcor]\ncluster_views = \"keyframes\"\n");
+        let c = overlay_file(&Config::default(), &p).unwrap();
+        assert_eq!(config_name(&c), "mcor-keyframes");
+        assert_eq!(c.mcor.unwrap().cluster_views, ClusterViews::Keyframes);
         let p = file("rc", "[rc]\nhypotheses = 32\n");
         let c = overlay_file(&Config::default(), &p).unwrap();
         assert_eq!(config_name(&c), "rc");
@@ -213,13 +218,13 @@ mod tests {
         let c = apply_switches(
             Config::default(),
             Switches {
-                mcor_cluster: Some(ClusterViews::EveryFrame),
+                mcor_cluster: Some(ClusterViews::Keyframes),
                 rc: true,
                 ..Switches::default()
             },
         );
         assert_eq!(config_name(&c), "rc+mcor");
-        assert_eq!(c.mcor.unwrap().cluster_views, ClusterViews::EveryFrame);
+        assert_eq!(c.mcor.unwrap().cluster_views, ClusterViews::Keyframes);
     }
 
     #[test]

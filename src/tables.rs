@@ -4,8 +4,9 @@
 //! rendered as Markdown and CSV.
 
 use crate::sweep::plan::ConfigKind;
-use crate::sweep::store::RunRecord;
+use crate::sweep::store::{FolderSettings, RunRecord};
 use datasets::{Catalog, Class};
+use slam_core::system::ClusterViews;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -152,7 +153,13 @@ fn paper_text(v: Option<datasets::Ate>) -> String {
 
 /// Table III: mean ATE RMSE (m) ± std over the runs, per sequence and configuration, at the
 /// default parameters; with `paper`, the published numbers beside ours.
-pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag: u32) -> Rendered {
+pub fn table3(
+    records: &[RunRecord],
+    catalog: &Catalog,
+    paper: bool,
+    settings: &FolderSettings,
+) -> Rendered {
+    let mapping_lag = settings.mapping_lag;
     let kinds: Vec<ConfigKind> = ConfigKind::EVERY
         .into_iter()
         .filter(|k| records.iter().any(|r| r.config == k.name()))
@@ -205,11 +212,17 @@ pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag
                 row.push(match (p, k) {
                     (None, _) => "-".into(),
                     (Some(p), ConfigKind::Orb) => paper_text(p.orb_slam2),
-                    (Some(p), ConfigKind::Mcor | ConfigKind::McorFrames) => paper_text(p.mcor),
+                    (
+                        Some(p),
+                        ConfigKind::Mcor | ConfigKind::McorFrames | ConfigKind::McorKeyframes,
+                    ) => paper_text(p.mcor),
                     (Some(p), ConfigKind::Avc) => paper_text(p.avc),
-                    (Some(p), ConfigKind::McorAvc | ConfigKind::McorFramesAvc) => {
-                        paper_text(p.mcor_avc)
-                    }
+                    (
+                        Some(p),
+                        ConfigKind::McorAvc
+                        | ConfigKind::McorFramesAvc
+                        | ConfigKind::McorKeyframesAvc,
+                    ) => paper_text(p.mcor_avc),
                     (Some(_), ConfigKind::Rc) => "-".into(),
                 });
             }
@@ -232,7 +245,7 @@ pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag
          (tau_MF, tau_GF, tau_MG) = {:?} m, AVC baseline {} m. Association: evaluate_ate.py's (|dt| < 0.02 s, \
          greedy, each stamp once), SE3 Umeyama alignment; EuRoC estimates converted to the body frame. \
          'F': more than half the runs failed (fewer than 80 % of the frames tracked, or no ATE); `(kF)`: k \
-         failed runs left out of the mean. {}{}",
+         failed runs left out of the mean. {}{}{}",
         seeds.saturating_sub(1),
         DEFAULT_TAUS,
         DEFAULT_BASELINE,
@@ -250,6 +263,21 @@ pub fn table3(records: &[RunRecord], catalog: &Catalog, paper: bool, mapping_lag
             " Synthetic sequences were swept with --vary-sequence: run k ran on its own realization of \
              the sequence (textures and noise from synth seed `synth_seed` in runs.csv), so the spread \
              measures the sensitivity to the sensor noise."
+        } else {
+            ""
+        },
+        if kinds.contains(&ConfigKind::Mcor) || kinds.contains(&ConfigKind::McorAvc) {
+            match settings.mcor_cluster {
+                ClusterViews::EveryFrame => {
+                    " MC-OR's clusters (w/ MC-OR, w/ MC-OR+AVC): every frame that kept the point \
+                     as an inlier, the paper's reading."
+                }
+                ClusterViews::Keyframes => {
+                    " MC-OR's clusters (w/ MC-OR, w/ MC-OR+AVC): the point's keyframe \
+                     observations only (made before the paper's every-frame reading became the \
+                     default; `mcor-keyframes` reproduces them)."
+                }
+            }
         } else {
             ""
         }
@@ -276,6 +304,8 @@ fn column_name(k: ConfigKind) -> &'static str {
         ConfigKind::McorAvc => "w/ MC-OR+AVC",
         ConfigKind::McorFrames => "w/ MC-OR (every frame)",
         ConfigKind::McorFramesAvc => "w/ MC-OR (every frame)+AVC",
+        ConfigKind::McorKeyframes => "w/ MC-OR (keyframes)",
+        ConfigKind::McorKeyframesAvc => "w/ MC-OR (keyframes)+AVC",
         ConfigKind::Rc => "noisefree: rigid consensus",
     }
 }
@@ -519,7 +549,7 @@ mod tests {
     fn twins_print_the_paper_figures_of_the_sequence_they_imitate() {
         let catalog = Catalog::embedded();
         let records = [record("twin_fr1_360", 0.036), record("kinect", 0.001)];
-        let t = table3(&records, &catalog, true, 0);
+        let t = table3(&records, &catalog, true, &FolderSettings::default());
         let line = |name: &str| {
             t.markdown
                 .lines()

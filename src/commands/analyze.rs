@@ -87,10 +87,12 @@ pub struct OutlierArgs {
     /// Frame drawn for Fig. 7 [default: the one with most MC-OR rejections].
     #[arg(long, value_name = "N")]
     pub frame: Option<usize>,
-    /// What runs beside the baseline: `mcor` (the paper's MC-OR, keyframe clusters),
-    /// `mcor-frames` (MC-OR with every-frame clusters) or `rc` (noisefree's rigid consensus).
-    /// Outputs of a technique other than `mcor` carry its name (`outliers_P_rc.csv`, ...).
-    #[arg(long, default_value = "mcor", value_parser = ["mcor", "mcor-frames", "rc"])]
+    /// What runs beside the baseline: `mcor` (the paper's MC-OR with the configuration's
+    /// cluster reading, every frame by default), `mcor-frames` (every-frame clusters named
+    /// explicitly), `mcor-keyframes` (keyframe clusters, the default before issue 18) or `rc`
+    /// (noisefree's rigid consensus). Outputs of a technique other than `mcor` carry its name
+    /// (`outliers_P_rc.csv`, ...).
+    #[arg(long, default_value = "mcor", value_parser = ["mcor", "mcor-frames", "mcor-keyframes", "rc"])]
     pub technique: String,
 }
 
@@ -105,6 +107,13 @@ fn technique(name: &str, base: &Config) -> (Config, &'static str, String) {
                 ..base.mcor.clone().unwrap_or_default()
             });
             (c, "w/ MC-OR (every frame)", "_mcor-frames".into())
+        }
+        "mcor-keyframes" => {
+            c.mcor = Some(McorParams {
+                cluster_views: ClusterViews::Keyframes,
+                ..base.mcor.clone().unwrap_or_default()
+            });
+            (c, "w/ MC-OR (keyframes)", "_mcor-keyframes".into())
         }
         "rc" => {
             c.mcor = None;

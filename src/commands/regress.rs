@@ -60,7 +60,7 @@ fn case_config(seq: &Sequence, case: &Case) -> Config {
     let mut c = base_config(seq.camera.sensor);
     c.seed = SUITE_SEED;
     c.mcor = case.kind.mcor().then(|| McorParams {
-        cluster_views: case.kind.cluster_views(),
+        cluster_views: case.kind.cluster_views().unwrap_or_default(),
         ..McorParams::default()
     });
     c.avc = case.kind.avc().then(AvcParams::default);

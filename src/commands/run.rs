@@ -50,9 +50,9 @@ pub struct RunArgs {
     /// Turn on MC-OR (paper III-A) with its default thresholds (0.7, 0.7, 0.5 m).
     #[arg(long)]
     pub mcor: bool,
-    /// MC-OR's cluster (implies --mcor): `keyframes` (one feature per observing keyframe, the
-    /// default) or `every-frame` (every tracked frame that kept the point as an inlier adds its
-    /// feature: the paper's "tracked across N camera views").
+    /// MC-OR's cluster (implies --mcor): `every-frame` (the default: every tracked frame that
+    /// kept the point as an inlier adds its feature, the paper's "tracked across N camera
+    /// views") or `keyframes` (one feature per observing keyframe, the default before issue 18).
     #[arg(long = "mcor-cluster", value_name = "READING", value_parser = parse_cluster_views)]
     pub mcor_cluster: Option<ClusterViews>,
     /// Turn on noisefree's rigid consensus (beyond the paper): only the matches one rigid camera

@@ -14,7 +14,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use slam_core::feature::OrbConfig;
 use slam_core::place::Vocabulary;
-use slam_core::system::{ClusterViews, Config};
+use slam_core::system::Config;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -168,8 +168,8 @@ pub fn job_config(base: &Config, job: &Job) -> Config {
         m.tau_mf = job.params.tau_mf.unwrap_or(m.tau_mf);
         m.tau_gf = job.params.tau_gf.unwrap_or(m.tau_gf);
         m.tau_mg = job.params.tau_mg.unwrap_or(m.tau_mg);
-        if job.kind.cluster_views() == ClusterViews::EveryFrame {
-            m.cluster_views = ClusterViews::EveryFrame;
+        if let Some(views) = job.kind.cluster_views() {
+            m.cluster_views = views;
         }
         m
     });
@@ -256,12 +256,20 @@ pub fn run(args: SweepArgs) -> Result<()> {
         Some(p) => overlay_file(&Config::default(), p)?.loop_closing.enabled,
         None => true,
     } && vocabulary.vocabulary.is_some();
+    // The reading of the `mcor` and `mcor+avc` columns: the config file's, else the default.
+    let mcor_cluster = match &args.config {
+        Some(p) => overlay_file(&Config::default(), p)?.mcor,
+        None => None,
+    }
+    .unwrap_or_default()
+    .cluster_views;
     pin_settings(
         &args.out,
         &FolderSettings {
             mapping_lag,
             vocabulary: vocabulary.identity.clone(),
             loop_closing: loop_closing_on,
+            mcor_cluster,
         },
     )?;
     let mine: Vec<&Job> = all_jobs

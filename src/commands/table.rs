@@ -2,7 +2,7 @@
 //! the paper's tables, as Markdown and CSV beside the records.
 
 use crate::commands::sweep::is_sweep_dir;
-use crate::sweep::store::{load_dir, mapping_lag_of};
+use crate::sweep::store::{load_dir, settings_of};
 use crate::tables::{loops_table, table1, table3, table4, threshold_grid, Rendered};
 use anyhow::{bail, Result};
 use ate_eval::io::write_atomic;
@@ -37,7 +37,7 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         dir.display(),
         records.len()
     );
-    let t3 = table3(&records, catalog, paper, mapping_lag_of(dir)?);
+    let t3 = table3(&records, catalog, paper, &settings_of(dir)?);
     write_table(dir, "table3", &t3)?;
     all.push_str(&t3.markdown);
     if let Some(t1) = table1(&records, catalog) {

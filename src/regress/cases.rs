@@ -82,7 +82,7 @@ pub const SUITE: [SuiteSequence; 6] = [
         frames: 150,
         synth_seed: 0,
         exercises: "moving people: outliers, MC-OR's rejections",
-        extra: &[ConfigKind::McorFrames, ConfigKind::Rc],
+        extra: &[ConfigKind::McorKeyframes, ConfigKind::Rc],
     },
     SuiteSequence {
         preset: "occluded",
@@ -111,8 +111,8 @@ pub const SUITE: [SuiteSequence; 6] = [
         synth_seed: 0,
         exercises: "a twin: articulated people walking in an office before a still fr3 camera, \
                     the Kinect colour imaging (blur, rolling shutter, auto-exposure, noise) and \
-                    depth model; MC-OR's every-frame clusters and the rigid consensus",
-        extra: &[ConfigKind::McorFrames, ConfigKind::Rc],
+                    depth model; MC-OR's two cluster readings and the rigid consensus",
+        extra: &[ConfigKind::McorKeyframes, ConfigKind::Rc],
     },
 ];
 

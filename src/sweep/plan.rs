@@ -5,8 +5,9 @@ use anyhow::{bail, Context, Result};
 use slam_core::system::ClusterViews;
 use std::fmt;
 
-/// The paper's four columns of Table III, and the columns of MC-OR's every-frame cluster
-/// reading (`ClusterViews::EveryFrame`; `mcor` is the keyframe reading).
+/// The paper's four columns of Table III (`mcor` and `mcor+avc` with the folder's MC-OR cluster
+/// reading, every frame by default), columns that name MC-OR's reading explicitly, and
+/// noisefree's rigid consensus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum ConfigKind {
     /// ORB-SLAM2 baseline (both techniques off).
@@ -21,6 +22,10 @@ pub enum ConfigKind {
     McorFrames,
     /// w/ MC-OR (every-frame clusters) + AVC.
     McorFramesAvc,
+    /// w/ MC-OR, clusters built from the observing keyframes only (the default before issue 18).
+    McorKeyframes,
+    /// w/ MC-OR (keyframe clusters) + AVC.
+    McorKeyframesAvc,
     /// noisefree's rigid consensus (beyond the paper), neither MC-OR nor AVC.
     Rc,
 }
@@ -35,13 +40,15 @@ impl ConfigKind {
     ];
 
     /// Every kind, the paper's four first (the column order of the tables).
-    pub const EVERY: [ConfigKind; 7] = [
+    pub const EVERY: [ConfigKind; 9] = [
         ConfigKind::Orb,
         ConfigKind::Mcor,
         ConfigKind::Avc,
         ConfigKind::McorAvc,
         ConfigKind::McorFrames,
         ConfigKind::McorFramesAvc,
+        ConfigKind::McorKeyframes,
+        ConfigKind::McorKeyframesAvc,
         ConfigKind::Rc,
     ];
 
@@ -54,6 +61,8 @@ impl ConfigKind {
             ConfigKind::McorAvc => "mcor+avc",
             ConfigKind::McorFrames => "mcor-frames",
             ConfigKind::McorFramesAvc => "mcor-frames+avc",
+            ConfigKind::McorKeyframes => "mcor-keyframes",
+            ConfigKind::McorKeyframesAvc => "mcor-keyframes+avc",
             ConfigKind::Rc => "rc",
         }
     }
@@ -67,10 +76,12 @@ impl ConfigKind {
             "mcor+avc" | "avc+mcor" => ConfigKind::McorAvc,
             "mcor-frames" => ConfigKind::McorFrames,
             "mcor-frames+avc" | "avc+mcor-frames" => ConfigKind::McorFramesAvc,
+            "mcor-keyframes" => ConfigKind::McorKeyframes,
+            "mcor-keyframes+avc" | "avc+mcor-keyframes" => ConfigKind::McorKeyframesAvc,
             "rc" => ConfigKind::Rc,
             other => bail!(
                 "unknown configuration {other:?}; expected orb, mcor, avc, mcor+avc, mcor-frames, \
-                 mcor-frames+avc or rc"
+                 mcor-frames+avc, mcor-keyframes, mcor-keyframes+avc or rc"
             ),
         })
     }
@@ -83,6 +94,8 @@ impl ConfigKind {
                 | ConfigKind::McorAvc
                 | ConfigKind::McorFrames
                 | ConfigKind::McorFramesAvc
+                | ConfigKind::McorKeyframes
+                | ConfigKind::McorKeyframesAvc
         )
     }
 
@@ -91,11 +104,15 @@ impl ConfigKind {
         self == ConfigKind::Rc
     }
 
-    /// MC-OR's cluster reading of this kind (keyframes unless an every-frame kind).
-    pub fn cluster_views(self) -> ClusterViews {
+    /// MC-OR's cluster reading this kind names; `None`: the configuration's (every frame
+    /// unless a config file says otherwise).
+    pub fn cluster_views(self) -> Option<ClusterViews> {
         match self {
-            ConfigKind::McorFrames | ConfigKind::McorFramesAvc => ClusterViews::EveryFrame,
-            _ => ClusterViews::Keyframes,
+            ConfigKind::McorFrames | ConfigKind::McorFramesAvc => Some(ClusterViews::EveryFrame),
+            ConfigKind::McorKeyframes | ConfigKind::McorKeyframesAvc => {
+                Some(ClusterViews::Keyframes)
+            }
+            _ => None,
         }
     }
 
@@ -103,7 +120,10 @@ impl ConfigKind {
     pub fn avc(self) -> bool {
         matches!(
             self,
-            ConfigKind::Avc | ConfigKind::McorAvc | ConfigKind::McorFramesAvc
+            ConfigKind::Avc
+                | ConfigKind::McorAvc
+                | ConfigKind::McorFramesAvc
+                | ConfigKind::McorKeyframesAvc
         )
     }
 }

@@ -7,6 +7,7 @@
 use super::plan::{run_key, Params, Shard};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
+use slam_core::system::ClusterViews;
 use std::collections::BTreeSet;
 use std::fs::{File, OpenOptions};
 use std::io::Write;
@@ -96,16 +97,20 @@ pub struct FolderSettings {
     pub vocabulary: String,
     /// Whether the runs closed loops (loop closing on and a vocabulary loaded).
     pub loop_closing: bool,
+    /// MC-OR's cluster reading of the `mcor` and `mcor+avc` runs (the kinds that name their
+    /// reading, such as `mcor-keyframes`, say it themselves).
+    pub mcor_cluster: ClusterViews,
 }
 
 impl Default for FolderSettings {
     /// A folder without [`SETTINGS_FILE`]: synchronous runs from before vocabularies and loop
-    /// closing existed (brute-force relocalization: `none`).
+    /// closing existed (brute-force relocalization: `none`), MC-OR with keyframe clusters.
     fn default() -> Self {
         FolderSettings {
             mapping_lag: 0,
             vocabulary: "none".into(),
             loop_closing: false,
+            mcor_cluster: ClusterViews::Keyframes,
         }
     }
 }
@@ -138,20 +143,26 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
                     format!("{}: loop_closing is not true or false", path.display())
                 })?,
             };
+            // Absent: the folder predates the every-frame default of MC-OR's cluster.
+            let mcor_cluster = match v.get("mcor_cluster").map(|x| x.as_str()) {
+                None => ClusterViews::Keyframes,
+                Some(Some("keyframes")) => ClusterViews::Keyframes,
+                Some(Some("every-frame")) => ClusterViews::EveryFrame,
+                Some(_) => bail!(
+                    "{}: mcor_cluster is not \"keyframes\" or \"every-frame\"",
+                    path.display()
+                ),
+            };
             Ok(FolderSettings {
                 mapping_lag,
                 vocabulary,
                 loop_closing,
+                mcor_cluster,
             })
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(FolderSettings::default()),
         Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
     }
-}
-
-/// The emulated local-mapping lag of the runs in sweep folder `dir` (0 when not recorded).
-pub fn mapping_lag_of(dir: &Path) -> Result<u32> {
-    Ok(settings_of(dir)?.mapping_lag)
 }
 
 /// Makes sure every run recorded in `dir` was made with `settings`. A folder with runs of
@@ -204,11 +215,26 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
                 }
             );
         }
+        if recorded.mcor_cluster != settings.mcor_cluster {
+            bail!(
+                "{} holds mcor runs made with MC-OR's {} clusters; this sweep's mcor uses {} \
+                 clusters: use another --out folder, or a config file with [mcor] cluster_views \
+                 = {:?} to add to those runs (configurations mcor-keyframes and mcor-frames \
+                 name their reading in any folder)",
+                dir.display(),
+                recorded.mcor_cluster.name(),
+                settings.mcor_cluster.name(),
+                recorded.mcor_cluster.name()
+            );
+        }
     }
     let text = format!(
         "# how every run in this folder was made (a sweep with other settings is refused here)\n\
-         mapping_lag = {}\nvocabulary = {:?}\nloop_closing = {}\n",
-        settings.mapping_lag, settings.vocabulary, settings.loop_closing
+         mapping_lag = {}\nvocabulary = {:?}\nloop_closing = {}\nmcor_cluster = {:?}\n",
+        settings.mapping_lag,
+        settings.vocabulary,
+        settings.loop_closing,
+        settings.mcor_cluster.name()
     );
     ate_eval::io::write_atomic(&path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
@@ -451,5 +477,43 @@ mod tests {
         s2.append(&rec("a", 1)).unwrap();
         s2.append(&rec("a", 0)).unwrap(); // the same run recorded twice
         assert_eq!(load_dir(&d).unwrap().len(), 2);
+    }
+
+    #[test]
+    fn a_folder_pins_mcor_s_cluster_reading() {
+        let d = tmpdir("pin-cluster");
+        let s = RunStore::open(&d, None).unwrap();
+        let every = FolderSettings {
+            mapping_lag: 3,
+            vocabulary: "v".into(),
+            loop_closing: true,
+            mcor_cluster: ClusterViews::EveryFrame,
+        };
+        pin_settings(&d, &every).unwrap();
+        assert_eq!(settings_of(&d).unwrap(), every);
+        s.append(&rec("a", 0)).unwrap();
+        drop(s);
+        let keyframes = FolderSettings {
+            mcor_cluster: ClusterViews::Keyframes,
+            ..every.clone()
+        };
+        let e = format!("{:#}", pin_settings(&d, &keyframes).unwrap_err());
+        assert!(e.contains("every-frame clusters"), "{e}");
+        pin_settings(&d, &every).unwrap();
+        // A folder from before the field: keyframe clusters.
+        let old = tmpdir("pin-cluster-old");
+        std::fs::create_dir_all(&old).unwrap();
+        std::fs::write(
+            old.join(SETTINGS_FILE),
+            "mapping_lag = 3\nvocabulary = \"v\"\nloop_closing = true\n",
+        )
+        .unwrap();
+        assert_eq!(settings_of(&old).unwrap(), keyframes);
+        std::fs::write(old.join(SETTINGS_FILE), "mcor_cluster = \"often\"\n").unwrap();
+        let e = format!("{:#}", settings_of(&old).unwrap_err());
+        assert!(
+            e.contains(SETTINGS_FILE) && e.contains("mcor_cluster"),
+            "{e}"
+        );
     }
 }
