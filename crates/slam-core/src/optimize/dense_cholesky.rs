@@ -110,34 +110,8 @@ fn cholesky_in_place_impl(a: &mut [f64], n: usize) -> bool {
             // `col_j.axpy(-L[j, k], col_k, 1)`, i.e. `(-L[j, k]) L[i, k] + a`, equals
             // `a - L[j, k] L[i, k]` exactly (negation is exact and addition commutes). Rows
             // `below..tiled` already hold the terms k < j0.
-            let mut i0 = below;
-            while i0 + CHUNK <= tiled {
-                let mut acc: [f64; CHUNK] = col_j[i0..i0 + CHUNK].try_into().expect("chunk");
-                for k in j0..j {
-                    let col_k = &done[k * n..k * n + n];
-                    let f = col_k[j];
-                    let x: &[f64; CHUNK] = col_k[i0..i0 + CHUNK].try_into().expect("chunk");
-                    for l in 0..CHUNK {
-                        acc[l] -= f * x[l];
-                    }
-                }
-                col_j[i0..i0 + CHUNK].copy_from_slice(&acc);
-                i0 += CHUNK;
-            }
-            let mut i0 = tiled;
-            while i0 + CHUNK <= n {
-                let mut acc: [f64; CHUNK] = col_j[i0..i0 + CHUNK].try_into().expect("chunk");
-                for k in 0..j {
-                    let col_k = &done[k * n..k * n + n];
-                    let f = col_k[j];
-                    let x: &[f64; CHUNK] = col_k[i0..i0 + CHUNK].try_into().expect("chunk");
-                    for l in 0..CHUNK {
-                        acc[l] -= f * x[l];
-                    }
-                }
-                col_j[i0..i0 + CHUNK].copy_from_slice(&acc);
-                i0 += CHUNK;
-            }
+            subtract_in_chunks(col_j, done, n, j, below..tiled, j0);
+            let i0 = subtract_in_chunks(col_j, done, n, j, tiled..n, 0);
             for i in (j..below).chain(i0..n) {
                 let mut acc = col_j[i];
                 for k in 0..j {
@@ -159,6 +133,35 @@ fn cholesky_in_place_impl(a: &mut [f64], n: usize) -> bool {
         j0 = below;
     }
     true
+}
+
+/// Subtracts `L[j, k] L[i, k]` for `k` in `k_from..j`, one term at a time in increasing `k`,
+/// from the entries of column `col_j` in the whole chunks of `rows` (a chunk kept in registers
+/// over all `k`); returns where the whole chunks end (the rest of `rows` is left untouched).
+#[inline(always)]
+fn subtract_in_chunks(
+    col_j: &mut [f64],
+    done: &[f64],
+    n: usize,
+    j: usize,
+    rows: std::ops::Range<usize>,
+    k_from: usize,
+) -> usize {
+    let mut i0 = rows.start;
+    while i0 + CHUNK <= rows.end {
+        let mut acc: [f64; CHUNK] = col_j[i0..i0 + CHUNK].try_into().expect("chunk");
+        for k in k_from..j {
+            let col_k = &done[k * n..k * n + n];
+            let f = col_k[j];
+            let x: &[f64; CHUNK] = col_k[i0..i0 + CHUNK].try_into().expect("chunk");
+            for l in 0..CHUNK {
+                acc[l] -= f * x[l];
+            }
+        }
+        col_j[i0..i0 + CHUNK].copy_from_slice(&acc);
+        i0 += CHUNK;
+    }
+    i0
 }
 
 /// Solves `L L^T x = b` in place with the factor of [`cholesky_in_place`], bit for bit as
