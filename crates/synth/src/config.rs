@@ -1,6 +1,7 @@
 //! Configuration of a synthetic sequence: camera, trajectory, scene options, image noise and
 //! every component of the depth-sensor model, each its own switch; plus the named presets.
 
+use nalgebra::Isometry3;
 use slam_core::{Camera, SensorKind};
 use std::fmt;
 use std::path::Path;
@@ -352,6 +353,46 @@ pub struct SynthConfig {
     /// Frames `[start, start + n)` fully covered by a flat featureless surface 0.5 m in front of
     /// the camera (as a hand over the lens), for relocalisation tests. Off by default.
     pub occlusion: Option<(usize, usize)>,
+    /// A calibrated, unrectified stereo rig (stereo only): the right image is rendered by its
+    /// own camera (intrinsics, lens distortion) at its own pose, and the EuRoC writer puts both
+    /// calibrations in `sensor.yaml`. `None` (default): a rectified pair, the right camera
+    /// being the left one shifted by `bf / fx` along x.
+    pub rig: Option<StereoRig>,
+    /// Motion-capture noise on the ground truth the writers put on disk (and the in-memory
+    /// sequence's ground truth); the rendering always uses the exact poses. Off by default.
+    pub mocap_noise: Option<MocapNoise>,
+}
+
+/// An unrectified stereo rig as a calibration describes it (EuRoC's `sensor.yaml` pair): the
+/// left camera is [`SynthConfig::camera`], the right one is here.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StereoRig {
+    /// The right camera (cam1): its intrinsics, size and lens distortion.
+    pub right: Camera,
+    /// Pose of the right camera in the left camera's frame, T_cam0_cam1.
+    pub left_from_right: Isometry3<f64>,
+    /// Pose of the left camera in the body (IMU) frame, T_BS of cam0: the ground truth is
+    /// written for the body, as EuRoC's is.
+    pub body_from_left: Isometry3<f64>,
+}
+
+impl StereoRig {
+    /// T_BS of the right camera: its pose in the body frame.
+    pub fn body_from_right(&self) -> Isometry3<f64> {
+        self.body_from_left * self.left_from_right
+    }
+}
+
+/// White noise of a motion-capture system on the ground-truth poses: each written pose is the
+/// true one moved by an independent Gaussian displacement (per world axis) and rotated by an
+/// independent Gaussian rotation vector (per body axis), drawn from the sequence seed and the
+/// frame ([`crate::Generator::measured_pose`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MocapNoise {
+    /// Standard deviation of the position error per axis, metres.
+    pub position_m: f64,
+    /// Standard deviation of the orientation error per axis, radians (0: orientation exact).
+    pub angle_rad: f64,
 }
 
 impl Default for SynthConfig {
@@ -365,6 +406,8 @@ impl Default for SynthConfig {
             depth_noise: DepthNoise::default(),
             moving_objects: None,
             occlusion: None,
+            rig: None,
+            mocap_noise: None,
         }
     }
 }
@@ -414,7 +457,8 @@ pub enum Preset {
     /// `distorted` depth error, stronger. Its default length is the circuit plus the revisit
     /// ([`Preset::default_frames`]).
     Loop,
-    /// A twin of one of the paper's TUM sequences: index into [`crate::twins::TWINS`].
+    /// A twin of one of the paper's sequences (TUM or EuRoC): index into
+    /// [`crate::twins::TWINS`].
     Twin(usize),
 }
 
@@ -567,7 +611,7 @@ impl fmt::Display for Preset {
 
 /// The effects a configuration can be stripped of one at a time ([`SynthConfig::without`]),
 /// with what each removes: the names of an ablation.
-pub const EFFECTS: [(&str, &str); 15] = [
+pub const EFFECTS: [(&str, &str); 16] = [
     (
         "lens",
         "lens distortion written into the images (the camera becomes a pinhole)",
@@ -604,6 +648,10 @@ pub const EFFECTS: [(&str, &str); 15] = [
     ),
     ("misregistration", "RGB-depth misregistration"),
     ("depth_distortion", "systematic depth distortion"),
+    (
+        "mocap_noise",
+        "motion-capture noise on the written ground truth (the EuRoC twins')",
+    ),
 ];
 
 impl SynthConfig {
@@ -613,7 +661,12 @@ impl SynthConfig {
     pub fn without(&mut self, name: &str) -> Result<(), SynthError> {
         let d = &mut self.depth_noise;
         match name {
-            "lens" => self.camera.distortion = None,
+            "lens" => {
+                self.camera.distortion = None;
+                if let Some(r) = &mut self.rig {
+                    r.right.distortion = None;
+                }
+            }
             "blur" => self.imaging.exposure = None,
             "rolling_shutter" => self.imaging.rolling_shutter = None,
             "vignetting" => self.imaging.vignetting = None,
@@ -641,6 +694,7 @@ impl SynthConfig {
             "holes" => d.holes = None,
             "misregistration" => d.misregistration = None,
             "depth_distortion" => d.distortion = None,
+            "mocap_noise" => self.mocap_noise = None,
             _ => {
                 return Err(SynthError::UnknownName {
                     what: "effect",
@@ -722,6 +776,20 @@ impl SynthConfig {
                 return bad("sensor noise needs read_dn >= 0 and electrons_per_dn > 0");
             }
         }
+        if let Some(r) = &self.rig {
+            if c.sensor != SensorKind::Stereo {
+                return bad("a stereo rig needs a stereo camera");
+            }
+            let q = &r.right;
+            if q.width != c.width || q.height != c.height || !(q.fx > 0.0 && q.fy > 0.0) {
+                return bad("the rig's right camera needs the left one's size and positive fx, fy");
+            }
+        }
+        if let Some(m) = &self.mocap_noise {
+            if !(m.position_m >= 0.0 && m.angle_rad >= 0.0) {
+                return bad("motion-capture noise needs position_m >= 0 and angle_rad >= 0");
+            }
+        }
         if let Some(m) = &self.moving_objects {
             if !(1..=3).contains(&m.count) {
                 return bad("moving object count must be 1..=3");
@@ -769,7 +837,7 @@ mod tests {
             let mut again = c.clone();
             again.without(name).unwrap();
             assert_eq!(again, c, "{name}: removing twice is removing once");
-            if !matches!(name, "misregistration" | "depth_distortion") {
+            if !matches!(name, "misregistration" | "depth_distortion" | "mocap_noise") {
                 assert_ne!(c, full, "{name}: the twin has this effect");
             }
         }

@@ -1,11 +1,18 @@
 //! Writes a generated stereo sequence in the EuRoC ASL layout: `mav0/cam0|cam1/data/<ns>.png`,
 //! `data.csv` (`#timestamp [ns],filename`), `sensor.yaml` (T_BS, rate, resolution, intrinsics,
-//! zero distortion: the synthetic pair is already rectified), `mav0/body.yaml` and
-//! `mav0/state_groundtruth_estimate0/data.csv` with the BODY pose in EuRoC's column layout.
+//! distortion), `mav0/body.yaml` and `mav0/state_groundtruth_estimate0/data.csv` with the BODY
+//! pose in EuRoC's column layout.
+//!
+//! Two kinds of pair: a rectified pinhole pair (the `stereo` preset: zero distortion, cam1 the
+//! baseline along cam0's x), or a calibrated rig ([`crate::config::StereoRig`], the EuRoC
+//! twins): each camera's own intrinsics, distortion and T_BS, the images distorted and
+//! unrectified, so a reader rectifies them as it does real EuRoC data.
 //!
 //! The camera is not at the body origin: cam0 sits at [`body_from_cam0`] (a rotation of about
-//! 90 degrees about z plus a few centimetres, like EuRoC's), so readers that forget the
-//! body-to-camera conversion get a visibly wrong trajectory.
+//! 90 degrees about z plus a few centimetres, like EuRoC's) or at the rig's T_BS, so readers
+//! that forget the body-to-camera conversion get a visibly wrong trajectory. With
+//! [`crate::config::MocapNoise`] the written ground truth carries motion-capture noise
+//! ([`Generator::measured_pose`]).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -14,6 +21,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use image::ExtendedColorType;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
+use slam_core::Camera;
 
 use crate::generator::Generator;
 use crate::write::{mkdir, png, text, Staging};
@@ -31,28 +39,53 @@ pub fn body_from_cam1(baseline: f64) -> Isometry3<f64> {
     body_from_cam0() * Translation3::new(baseline, 0.0, 0.0)
 }
 
-/// The body pose T_WB of a camera-to-world pose of cam0.
+/// The body pose T_WB of a camera-to-world pose of cam0 (the rectified pair's
+/// [`body_from_cam0`]).
 pub fn body_pose(pose_wc0: &Isometry3<f64>) -> Isometry3<f64> {
     pose_wc0 * body_from_cam0().inverse()
 }
 
-fn sensor_yaml(name: &str, t_bs: &Isometry3<f64>, gen: &Generator) -> String {
+/// T_BS of cam0 of `gen`'s sequence: its rig's, else [`body_from_cam0`].
+pub fn body_from_left(gen: &Generator) -> Isometry3<f64> {
+    gen.config()
+        .rig
+        .as_ref()
+        .map_or_else(body_from_cam0, |r| r.body_from_left)
+}
+
+/// The ground truth written for frame `index`: the body pose T_WB, exact or with the
+/// configuration's motion-capture noise.
+pub fn groundtruth_body(gen: &Generator, index: usize) -> Isometry3<f64> {
+    let b = gen.pose(index) * body_from_left(gen).inverse();
+    gen.measured_pose(&b, index)
+}
+
+fn sensor_yaml(name: &str, t_bs: &Isometry3<f64>, gen: &Generator, c: &Camera) -> String {
     let m = t_bs.to_homogeneous();
-    let c = gen.camera();
+    let rig = gen.config().rig.is_some();
+    let kind = if rig {
+        "raw, distorted"
+    } else {
+        "rectified pinhole"
+    };
+    let dist = match (rig, c.distortion) {
+        (true, Some(d)) => format!("{:?}, {:?}, {:?}, {:?}", d.k1, d.k2, d.p1, d.p2),
+        _ => "0.0, 0.0, 0.0, 0.0".to_string(),
+    };
     let row = |r: usize| {
-        format!(
-            "{:.12}, {:.12}, {:.12}, {:.12}",
-            m[(r, 0)],
-            m[(r, 1)],
-            m[(r, 2)],
-            m[(r, 3)]
-        )
+        let (a, b, c, d) = (m[(r, 0)], m[(r, 1)], m[(r, 2)], m[(r, 3)]);
+        if rig {
+            // Every digit, so the reader's rectification is the in-memory one's.
+            format!("{a:?}, {b:?}, {c:?}, {d:?}")
+        } else {
+            format!("{a:.12}, {b:.12}, {c:.12}, {d:.12}")
+        }
     };
     format!(
         "%YAML:1.0\n\
          # General sensor definitions.\n\
          sensor_type: camera\n\
-         comment: synthetic noisefree {name} (seed {seed}, rectified pinhole)\n\
+         comment: synthetic noisefree {name} (seed {seed}, {kind})\n\
          \n\
          # Sensor extrinsics wrt. the body-frame.\n\
          T_BS:\n  cols: 4\n  rows: 4\n  data: [{r0},\n         {r1},\n         {r2},\n         0.0, 0.0, 0.0, 1.0]\n\
@@ -63,7 +96,7 @@ fn sensor_yaml(name: &str, t_bs: &Isometry3<f64>, gen: &Generator) -> String {
          camera_model: pinhole\n\
          intrinsics: [{fx:?}, {fy:?}, {cx:?}, {cy:?}] #fu, fv, cu, cv\n\
          distortion_model: radial-tangential\n\
-         distortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n",
+         distortion_coefficients: [{dist}]\n",
         seed = gen.seed(),
         r0 = row(0),
         r1 = row(1),
@@ -144,7 +177,7 @@ fn write_into(
         let ns = gen.stamp_ns(i);
         // Infallible: writing into a String.
         let _ = writeln!(csv, "{ns},{ns}.png");
-        let b = body_pose(&gen.pose(i));
+        let b = groundtruth_body(gen, i);
         let p = b.translation.vector;
         let mut q = *b.rotation.quaternion();
         if q.w < 0.0 {
@@ -156,16 +189,20 @@ fn write_into(
             p.x, p.y, p.z, q.w, q.i, q.j, q.k
         );
     }
-    let baseline = gen.camera().baseline();
+    let left = gen.camera();
+    let (right, t_bs1) = match &gen.config().rig {
+        Some(r) => (r.right.clone(), r.body_from_right()),
+        None => (left.clone(), body_from_cam1(left.baseline())),
+    };
     text(&cams[0].join("data.csv"), &csv)?;
     text(&cams[1].join("data.csv"), &csv)?;
     text(
         &cams[0].join("sensor.yaml"),
-        &sensor_yaml("cam0", &body_from_cam0(), gen),
+        &sensor_yaml("cam0", &body_from_left(gen), gen, &left),
     )?;
     text(
         &cams[1].join("sensor.yaml"),
-        &sensor_yaml("cam1", &body_from_cam1(baseline), gen),
+        &sensor_yaml("cam1", &t_bs1, gen, &right),
     )?;
     text(
         &mav.join("body.yaml"),

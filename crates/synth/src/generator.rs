@@ -184,6 +184,26 @@ impl Generator {
         self.pose_at_time(self.time(index))
     }
 
+    /// `pose` (of frame `index`) as a motion-capture system reports it: with
+    /// [`crate::config::MocapNoise`], the position moved by a Gaussian error per world axis
+    /// and the orientation rotated by a Gaussian rotation vector (body axes), drawn from
+    /// (seed, frame); without, `pose` itself.
+    pub fn measured_pose(&self, pose: &Isometry3<f64>, index: usize) -> Isometry3<f64> {
+        let Some(m) = &self.config.mocap_noise else {
+            return *pose;
+        };
+        let key = NoiseKey::new(self.seed, index, Stream::Mocap);
+        let n = |k: u64| key.normal(k);
+        let dp = nalgebra::Vector3::new(n(0), n(1), n(2)) * m.position_m;
+        let dr = nalgebra::Vector3::new(n(3), n(4), n(5)) * m.angle_rad;
+        let rotation = if m.angle_rad > 0.0 {
+            pose.rotation * nalgebra::UnitQuaternion::from_scaled_axis(dr)
+        } else {
+            pose.rotation // a position-only tracker: orientation left exact
+        };
+        Isometry3::from_parts(Translation3::from(pose.translation.vector + dp), rotation)
+    }
+
     fn occluded(&self, index: usize) -> bool {
         self.config
             .occlusion
@@ -291,10 +311,10 @@ impl Generator {
         ae.settings(scale, nominal)
     }
 
-    fn photometry<'a>(&'a self, settings: &ExposureSettings) -> Photometry<'a> {
+    fn photometry<'a>(&'a self, settings: &ExposureSettings, camera: &'a Camera) -> Photometry<'a> {
         let im = &self.config.imaging;
         Photometry {
-            camera: &self.config.camera,
+            camera,
             scale: settings.scale,
             gain: settings.gain,
             vignetting: im.vignetting.as_ref(),
@@ -309,12 +329,12 @@ impl Generator {
         im.vignetting.is_some() || im.auto_exposure.is_some() || im.sensor_noise.is_some()
     }
 
-    /// Colour exposed over time (motion blur / rolling shutter) of the camera at `offset` from
+    /// Colour exposed over time (motion blur / rolling shutter) of `camera` at `offset` from
     /// the left / colour camera.
     fn exposed_colour(
         &self,
         t: f64,
-        offset: Option<Translation3<f64>>,
+        (camera, offset): (&Camera, Option<Isometry3<f64>>),
         occluded: bool,
         settings: &ExposureSettings,
     ) -> Vec<[f32; 3]> {
@@ -329,7 +349,7 @@ impl Generator {
         };
         Exposed {
             scene: &self.scene,
-            camera: &self.config.camera,
+            camera,
             pose_at: &pose_at,
             occluded,
             time: t,
@@ -368,7 +388,7 @@ impl Generator {
         let left = view.render(if timed { None } else { Some(shading) });
         let exposed;
         let colour: &[[f32; 3]] = if timed {
-            exposed = self.exposed_colour(t, None, occluded, &settings);
+            exposed = self.exposed_colour(t, (cam, None), occluded, &settings);
             &exposed
         } else {
             left.colour.as_deref().unwrap_or(&[])
@@ -388,7 +408,7 @@ impl Generator {
         });
         if self.config.is_rgbd() {
             let rgb = if self.photometric() {
-                exposed_rgb8(colour, &self.photometry(&settings), key_left)
+                exposed_rgb8(colour, &self.photometry(&settings, cam), key_left)
             } else {
                 noisy_rgb8(colour, sigma, key_left)
             };
@@ -444,9 +464,9 @@ impl Generator {
                 moving_mask,
             }
         } else {
-            let gray_of = |colour: &[[f32; 3]], key: NoiseKey| {
+            let gray_of = |colour: &[[f32; 3]], camera: &Camera, key: NoiseKey| {
                 if self.photometric() {
-                    exposed_gray8(colour, &self.photometry(&settings), key)
+                    exposed_gray8(colour, &self.photometry(&settings, camera), key)
                 } else {
                     noisy_gray8(colour, sigma, key)
                 }
@@ -454,16 +474,27 @@ impl Generator {
             let gray = GrayImage {
                 width: w,
                 height: h,
-                data: gray_of(colour, key_left),
+                data: gray_of(colour, cam, key_left),
             };
-            let offset = Translation3::new(cam.baseline(), 0.0, 0.0);
+            // The right camera: the calibrated rig's (own intrinsics, distortion and pose), or
+            // the left one shifted by the baseline (a rectified pair).
+            let (right_cam, offset) = match &self.config.rig {
+                Some(r) => (&r.right, r.left_from_right),
+                None => (
+                    cam,
+                    Isometry3::from_parts(
+                        Translation3::new(cam.baseline(), 0.0, 0.0),
+                        nalgebra::UnitQuaternion::identity(),
+                    ),
+                ),
+            };
             let right_colour = if timed {
-                self.exposed_colour(t, Some(offset), occluded, &settings)
+                self.exposed_colour(t, (right_cam, Some(offset)), occluded, &settings)
             } else {
                 let right_view = View {
                     scene: &self.scene,
                     placed: &placed,
-                    camera: cam,
+                    camera: right_cam,
                     pose_wc: pose_wc * offset,
                     occluded,
                 };
@@ -473,7 +504,7 @@ impl Generator {
             let right = GrayImage {
                 width: w,
                 height: h,
-                data: gray_of(&right_colour, key_right),
+                data: gray_of(&right_colour, right_cam, key_right),
             };
             SynthFrame {
                 index,

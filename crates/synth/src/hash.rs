@@ -21,6 +21,8 @@ pub enum Stream {
     BoundaryHole = 5,
     /// Per-pixel maximum range.
     Range = 6,
+    /// Motion-capture noise of the written ground truth (index: the pose component).
+    Mocap = 7,
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mixer with good avalanche.

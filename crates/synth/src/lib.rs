@@ -17,7 +17,8 @@
 //! - [`noise`]: the depth-sensor model and image noise;
 //! - [`hash`]: counter-based per-pixel randomness (order- and thread-independent);
 //! - [`generator`]: random access to frames of a (config, seed) sequence;
-//! - [`twins`]: twins of the paper's TUM sequences (camera, motion statistics, imaging);
+//! - [`twins`]: twins of the paper's TUM and EuRoC sequences (camera, motion statistics,
+//!   imaging, motion-capture noise);
 //! - [`tum`], [`euroc`]: writers of the TUM RGB-D and EuRoC ASL folder layouts;
 //! - [`contact`]: a contact-sheet picture (RGB | depth | depth noise) of a sequence.
 
@@ -43,8 +44,8 @@ use std::path::PathBuf;
 
 pub use config::{
     preset_names, AxialNoise, DepthLag, DepthNoise, DisparityQuantisation, Holes, ImageConfig,
-    LateralNoise, Misregistration, MovingObjects, Preset, Supersampling, SynthConfig,
-    SystematicDistortion, Trajectory, EFFECTS,
+    LateralNoise, Misregistration, MocapNoise, MovingObjects, Preset, StereoRig, Supersampling,
+    SynthConfig, SystematicDistortion, Trajectory, EFFECTS,
 };
 pub use contact::{contact_sheet, write_contact_sheet};
 pub use euroc::write_euroc;

@@ -1,9 +1,17 @@
-//! Synthetic twins of the paper's TUM RGB-D sequences: each has the real sequence's camera
-//! (intrinsics and the lens distortion TUM calibrated, written into the images), its duration
-//! and published mean translational and angular speed, a motion style and scene character
-//! like the real one's, and the imaging of a Kinect v1 colour camera (exposure blur, rolling
-//! shutter, vignetting, auto-exposure, shot and read noise) over the Kinect depth model with
-//! RGB and depth sampled at different instants.
+//! Synthetic twins of the paper's sequences. The TUM RGB-D twins have the real sequence's
+//! camera (intrinsics and the lens distortion TUM calibrated, written into the images), its
+//! duration and published mean translational and angular speed, a motion style and scene
+//! character like the real one's, and the imaging of a Kinect v1 colour camera (exposure
+//! blur, rolling shutter, vignetting, auto-exposure, shot and read noise) over the Kinect depth
+//! model with RGB and depth sampled at different instants.
+//!
+//! The EuRoC twins (`twin_v101`, `twin_mh01`) have the VI-sensor's stereo pair as the real
+//! `sensor.yaml` files calibrate it (two MT9V034 global-shutter cameras, 752x480 grey at
+//! 20 Hz, each with its own intrinsics, radial-tangential distortion and T_BS: the images are
+//! written distorted and unrectified, [`euroc_rig`]), the MT9V034's imaging
+//! ([`mt9v034_imaging`]), a MAV's smooth flight with the published duration and mean speeds,
+//! and ground truth with the noise of the real motion-capture system ([`VICON`],
+//! [`LEICA_MS50`]).
 //!
 //! The values and their sources are listed beside each constant; [`TWINS`] says which real
 //! sequence each twin imitates and what it does not model.
@@ -13,7 +21,13 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use slam_core::Camera;
 
-use crate::config::{DepthLag, DepthNoise, ImageConfig, MovingObjects, SynthConfig, Trajectory};
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use slam_core::{Distortion, SensorKind};
+
+use crate::config::{
+    DepthLag, DepthNoise, ImageConfig, MocapNoise, MovingObjects, StereoRig, SynthConfig,
+    Trajectory,
+};
 use crate::handheld::{HandHeldPath, MotionSpec, Orbit, Region, Tremor};
 use crate::imaging::{AutoExposure, Exposure, Imaging, RollingShutter, SensorNoise, Vignetting};
 use crate::people::Activity;
@@ -40,6 +54,25 @@ impl TumCamera {
     }
 }
 
+/// The camera of a twin: a TUM RGB-D camera, or EuRoC's VI-sensor stereo pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TwinCamera {
+    /// One of TUM's RGB-D cameras.
+    Tum(TumCamera),
+    /// The EuRoC VI-sensor's calibrated stereo pair ([`euroc_rig`]); the camera is cam0.
+    Euroc,
+}
+
+impl TwinCamera {
+    /// The (left / colour) camera model.
+    pub fn camera(&self) -> Camera {
+        match self {
+            TwinCamera::Tum(c) => c.camera(),
+            TwinCamera::Euroc => euroc_rig().0,
+        }
+    }
+}
+
 /// One twin: what it imitates and how.
 #[derive(Clone, Copy, Debug)]
 pub struct TwinSpec {
@@ -49,12 +82,12 @@ pub struct TwinSpec {
     /// sequences; `fr3_w_xyz` and `fr3_w_half` are not in Table III and not catalogued.
     pub imitates: &'static str,
     /// Camera.
-    pub camera: TumCamera,
-    /// Duration of the real sequence, seconds (TUM dataset page).
+    pub camera: TwinCamera,
+    /// Duration of the real sequence, seconds (TUM dataset page; EuRoC paper).
     pub duration_s: f64,
-    /// Mean translational speed of the real sequence, m/s (TUM dataset page).
+    /// Mean translational speed of the real sequence, m/s (TUM dataset page; EuRoC paper).
     pub mean_speed: f64,
-    /// Mean angular speed of the real sequence, degrees/s (TUM dataset page).
+    /// Mean angular speed of the real sequence, degrees/s (TUM dataset page; EuRoC paper).
     pub mean_angular_deg: f64,
     /// Motion and scene character in a sentence.
     pub character: &'static str,
@@ -62,6 +95,9 @@ pub struct TwinSpec {
     pub not_modelled: &'static str,
     /// People in the scene (fr3 walking / sitting), or none.
     pub people: Option<Activity>,
+    /// Noise of the motion-capture system put on the written ground truth, or none (the TUM
+    /// twins: exact ground truth, so their bytes stay those they had before this field).
+    pub mocap: Option<MocapNoise>,
 }
 
 /// Everything the twins share that they do not model of real data.
@@ -69,67 +105,72 @@ pub const NOT_MODELLED_ANYWHERE: &str = "one fixed room layout (textures from th
     Lambertian surfaces without specularities; a single point light; no IR interference \
     patterns; depth of the IR camera taken from the colour camera's viewpoint (registered)";
 
-/// The twins, in Table III order.
-pub const TWINS: [TwinSpec; 13] = [
+/// The twins, in Table III order (TUM, then EuRoC).
+pub const TWINS: [TwinSpec; 15] = [
     TwinSpec {
         name: "twin_fr1_desk",
         imitates: "fr1_desk",
-        camera: TumCamera::Fr1,
+        camera: TwinCamera::Tum(TumCamera::Fr1),
         duration_s: 23.40,
         mean_speed: 0.413,
         mean_angular_deg: 23.327,
         character: "fast hand-held sweeps over an office desk at 0.6-1.2 m",
         not_modelled: "the real desk clutter (keyboards, monitors); two desks side by side",
         people: None,
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr1_xyz",
         imitates: "fr1_xyz",
-        camera: TumCamera::Fr1,
+        camera: TwinCamera::Tum(TumCamera::Fr1),
         duration_s: 30.09,
         mean_speed: 0.244,
         mean_angular_deg: 8.920,
         character: "translation along the principal axes in front of a desk, little rotation",
         not_modelled: "the real motion is mostly along one axis at a time; ours mixes axes",
         people: None,
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr1_360",
         imitates: "fr1_360",
-        camera: TumCamera::Fr1,
+        camera: TwinCamera::Tum(TumCamera::Fr1),
         duration_s: 28.69,
         mean_speed: 0.210,
         mean_angular_deg: 41.600,
         character: "a full turn about the vertical in the middle of the room, fast rotation",
         not_modelled: "the real room is larger (far walls beyond 4 m lose depth); ours is 5 x 5 m",
         people: None,
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr2_desk",
         imitates: "fr2_desk",
-        camera: TumCamera::Fr2,
+        camera: TwinCamera::Tum(TumCamera::Fr2),
         duration_s: 99.36,
         mean_speed: 0.193,
         mean_angular_deg: 6.338,
         character: "slow walk in front of a desk, looking at it from 1.5-2.3 m",
         not_modelled: "the real path is one loop round the desk; ours sways in front and beside it",
         people: None,
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr2_coke",
         imitates: "fr2_coke",
-        camera: TumCamera::Fr2,
+        camera: TwinCamera::Tum(TumCamera::Fr2),
         duration_s: 82.40,
         mean_speed: 0.139,
         mean_angular_deg: 20.0,
         character: "objects on a table seen at close range (0.5-0.9 m), turning round them",
         not_modelled: "the real coke bottle's specular, transparent surfaces",
         people: None,
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_office",
         imitates: "fr3_office",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 87.09,
         mean_speed: 0.249,
         mean_angular_deg: 10.188,
@@ -138,22 +179,24 @@ pub const TWINS: [TwinSpec; 13] = [
             7.5 m ellipse almost three times, and so turns faster than the real one (12 deg/s \
             against 10.2)",
         people: None,
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_nst",
         imitates: "fr3_nst",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 56.48,
         mean_speed: 0.242,
         mean_angular_deg: 7.430,
         character: "a textured floor seen from 1 m, no 3-D structure",
         not_modelled: "the real posters on the floor have larger, more distinctive texture",
         people: None,
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_w_static",
         imitates: "fr3_w_static",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 24.83,
         mean_speed: 0.012,
         mean_angular_deg: 1.388,
@@ -161,44 +204,48 @@ pub const TWINS: [TwinSpec; 13] = [
             sit down and get up 0.9-2.2 m in front of it, at times covering much of the view",
         not_modelled: WALKERS_NOT_MODELLED,
         people: Some(Activity::Walking),
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_w_xyz",
         imitates: "fr3_w_xyz",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 28.83,
         mean_speed: 0.208,
         mean_angular_deg: 5.490,
         character: "the camera translates along its axes while two people walk in front of it",
         not_modelled: WALKERS_NOT_MODELLED,
         people: Some(Activity::Walking),
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_w_rpy",
         imitates: "fr3_w_rpy",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 30.61,
         mean_speed: 0.091,
         mean_angular_deg: 20.903,
         character: "the camera rolls, pitches and yaws on the spot while two people walk",
         not_modelled: WALKERS_NOT_MODELLED,
         people: Some(Activity::Walking),
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_w_half",
         imitates: "fr3_w_half",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 35.81,
         mean_speed: 0.221,
         mean_angular_deg: 18.267,
         character: "the camera moves over a half sphere looking at the desk while two people walk",
         not_modelled: WALKERS_NOT_MODELLED,
         people: Some(Activity::Walking),
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_s_static",
         imitates: "fr3_s_static",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 23.63,
         mean_speed: 0.011,
         mean_angular_deg: 1.699,
@@ -206,19 +253,84 @@ pub const TWINS: [TwinSpec; 13] = [
             gesture",
         not_modelled: WALKERS_NOT_MODELLED,
         people: Some(Activity::Sitting),
+        mocap: None,
     },
     TwinSpec {
         name: "twin_fr3_s_xyz",
         imitates: "fr3_s_xyz",
-        camera: TumCamera::Fr3,
+        camera: TwinCamera::Tum(TumCamera::Fr3),
         duration_s: 42.50,
         mean_speed: 0.132,
         mean_angular_deg: 3.562,
         character: "the camera translates along its axes in front of two seated people",
         not_modelled: WALKERS_NOT_MODELLED,
         people: Some(Activity::Sitting),
+        mocap: None,
+    },
+    // EuRoC: duration, length and mean speeds are the EuRoC paper's table of sequences
+    // (Burri et al., IJRR 2016; V1_01_easy 144 s, 58.6 m, 0.41 m/s, 0.28 rad/s; MH_01_easy
+    // 182 s, 80.6 m, 0.44 m/s, 0.22 rad/s), copied from the paper, not checkable offline here.
+    TwinSpec {
+        name: "twin_v101",
+        imitates: "v101",
+        camera: TwinCamera::Euroc,
+        duration_s: 144.0,
+        mean_speed: 0.41,
+        mean_angular_deg: 16.043, // 0.28 rad/s
+        character: "a MAV flies slowly round a motion-capture room at 1-2 m height, yawing to \
+            look at every wall, with a small high-frequency vibration",
+        not_modelled: EUROC_NOT_MODELLED,
+        people: None,
+        mocap: Some(VICON),
+    },
+    TwinSpec {
+        name: "twin_mh01",
+        imitates: "mh01",
+        camera: TwinCamera::Euroc,
+        duration_s: 182.0,
+        mean_speed: 0.44,
+        mean_angular_deg: 12.605, // 0.22 rad/s
+        character: "a MAV flies slowly through a room at 1-2 m height, yawing to look round it, \
+            with a small high-frequency vibration (the real one: a large machine hall)",
+        not_modelled: "the machine hall: a large, dark industrial hall with structure 10-30 m \
+            away and strong lighting changes, ours is the 5 x 5 m room of the other presets; \
+            the take-off from the floor at the start; the Leica tracker gives no orientation, \
+            so the real ground truth's orientation error (from the IMU fusion) is not \
+            modelled; no IMU data; the real ground truth's error is mostly slow (measured at \
+            rest on V1_01: 0.1 mm of frame-to-frame jitter), ours is white; one fixed room \
+            layout, Lambertian surfaces, a single point light",
+        people: None,
+        mocap: Some(LEICA_MS50),
     },
 ];
+
+/// What the V1_01 twin does not model of the real sequence.
+pub const EUROC_NOT_MODELLED: &str = "the Vicon room is about 8 x 8 m with walls 4 m away and \
+    more, ours is the 5 x 5 m room of the other presets (surfaces at 0.5-4.5 m); the take-off \
+    from the floor at the start; no IMU data; the real ground truth's error is mostly slow \
+    (measured at rest on V1_01: 0.1 mm of frame-to-frame jitter), ours is white; one fixed \
+    room layout, Lambertian surfaces, a single point light";
+
+/// The Vicon system of EuRoC's Vicon rooms: the EuRoC paper gives about 1 mm for its
+/// positions. Orientation: markers about 0.3 m apart, each at about 1 mm, averaged over four or
+/// more of them: 1 mm / 0.3 m / 2 = 1.7 mrad (0.1 degree) per axis, our estimate. White
+/// noise per frame; the real `state_groundtruth_estimate0` is the output of a smoother fusing
+/// Vicon and IMU, whose frame-to-frame jitter is far smaller: on the 76 ground-truth rows of
+/// ../shared/data/euroc_v101_head (the MAV at rest) the pose moves 0.2 mm and 0.4 mrad per
+/// 50 ms, the steps of white noise of 0.09 mm and 0.18 mrad per axis. The 1 mm is the
+/// documented accuracy, which the real data carries as a slow error.
+pub const VICON: MocapNoise = MocapNoise {
+    position_m: 0.001,
+    angle_rad: 0.0017,
+};
+
+/// The Leica Nova MS50 laser tracker of EuRoC's machine hall: about 1 mm in position (EuRoC
+/// paper); it tracks one prism and gives no orientation, so the orientation is left exact here
+/// (the real ground truth's orientation comes from the IMU fusion; not modelled).
+pub const LEICA_MS50: MocapNoise = MocapNoise {
+    position_m: 0.001,
+    angle_rad: 0.0,
+};
 
 /// What the people twins do not model of fr3's walking and sitting sequences.
 pub const WALKERS_NOT_MODELLED: &str = "people are rigid primitives (no clothes that fold, no \
@@ -239,6 +351,18 @@ pub fn twin(name: &str) -> Option<&'static TwinSpec> {
 pub const TREMOR: Tremor = Tremor {
     position_m: 0.00093,
     angle_rad: 0.123 * std::f64::consts::PI / 180.0,
+};
+
+/// The small fast motion of the EuRoC MAV's camera on top of its smooth flight: not a hand's
+/// tremor but the residual of the airframe's vibration through the VI-sensor's damped mount
+/// and of the position controller's corrections. No measurement was possible here (the real
+/// frames in ../shared/data are of the MAV at rest before take-off), so these are assumptions
+/// stated as such: 0.3 mm and 0.05 degree RMS per axis, a third of the hand's (0.93 mm) in
+/// position and under half in angle (0.123 degree), at the same 4-9 Hz; no [`crate::handheld::Shake`]
+/// solve (no real frame-to-frame ratio to reach).
+pub const MAV_VIBRATION: Tremor = Tremor {
+    position_m: 0.0003,
+    angle_rad: 0.05 * std::f64::consts::PI / 180.0,
 };
 
 /// Where each twin's eye moves and what it looks at, in the synthetic room (table top at
@@ -326,6 +450,28 @@ fn motion(t: &TwinSpec) -> MotionSpec {
             r([0.0, -1.6, 1.35], [0.55, 0.2, 0.3]),
             r([0.0, 0.3, 0.8], [0.3, 0.2, 0.1]),
         ),
+        // The MAV twins: a smooth flight inside a box of the room clear of the furniture
+        // (1.0-2.0 m high; the pillar at (-1.3, 0.3) and the table beyond y = 0.55 outside
+        // it), turning once about the vertical so the view sweeps every wall, a few degrees of
+        // bank, and the vibration instead of a hand's tremor.
+        "twin_v101" => MotionSpec {
+            turns: 1.0,
+            roll_rad: 3f64.to_radians(),
+            tremor: MAV_VIBRATION,
+            ..base(
+                r([0.0, -0.55, 1.5], [0.95, 0.8, 0.5]),
+                r([0.0, 1.5, 1.0], [1.5, 0.5, 0.5]),
+            )
+        },
+        "twin_mh01" => MotionSpec {
+            turns: 1.0,
+            roll_rad: 3f64.to_radians(),
+            tremor: MAV_VIBRATION,
+            ..base(
+                r([0.1, -0.6, 1.45], [1.0, 0.75, 0.45]),
+                r([0.0, 1.5, 0.9], [1.6, 0.5, 0.5]),
+            )
+        },
         _ => unreachable!("every twin has a motion"),
     }
 }
@@ -374,8 +520,157 @@ pub fn kinect_imaging() -> Imaging {
     }
 }
 
+/// A 3x4 `T_BS` of a `sensor.yaml` (row-major, the last row omitted) as an isometry; the
+/// rotation is re-orthonormalised (the files carry 12 digits).
+fn t_bs(m: [f64; 12]) -> Isometry3<f64> {
+    let r = Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]);
+    let r = Rotation3::from_matrix_eps(&r, 1e-12, 100, Rotation3::identity());
+    Isometry3::from_parts(
+        Translation3::from(Vector3::new(m[3], m[7], m[11])),
+        UnitQuaternion::from_rotation_matrix(&r),
+    )
+}
+
+/// EuRoC's VI-sensor stereo pair as the real `mav0/cam0|cam1/sensor.yaml` files calibrate it
+/// (copied from ../shared/data/euroc_v101_head; the same files ship with every EuRoC
+/// sequence): cam0 (the returned camera: 752x480, 20 Hz, intrinsics and radial-tangential
+/// distortion of the raw images) and the rig with cam1 and both T_BS. The camera's `bf` is
+/// fx times the 0.110 m between the two optical centres (only the validation reads it: the
+/// rig renders the right image). ThDepth 35 as ORB-SLAM2's EuRoC.yaml.
+pub fn euroc_rig() -> (Camera, StereoRig) {
+    let cam = |intr: [f64; 4], d: [f64; 4]| Camera {
+        fx: intr[0],
+        fy: intr[1],
+        cx: intr[2],
+        cy: intr[3],
+        width: 752,
+        height: 480,
+        distortion: Some(Distortion {
+            k1: d[0],
+            k2: d[1],
+            p1: d[2],
+            p2: d[3],
+            k3: 0.0,
+        }),
+        bf: 0.0,
+        th_depth: 35.0,
+        fps: 20.0,
+        sensor: SensorKind::Stereo,
+    };
+    let mut left = cam(
+        [458.654, 457.296, 367.215, 248.375],
+        [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05],
+    );
+    let right = cam(
+        [457.587, 456.134, 379.999, 255.238],
+        [-0.28368365, 0.07451284, -0.00010473, -3.55590700e-05],
+    );
+    let b0 = t_bs([
+        0.0148655429818,
+        -0.999880929698,
+        0.00414029679422,
+        -0.0216401454975,
+        0.999557249008,
+        0.0149672133247,
+        0.025715529948,
+        -0.064676986768,
+        -0.0257744366974,
+        0.00375618835797,
+        0.999660727178,
+        0.00981073058949,
+    ]);
+    let b1 = t_bs([
+        0.0125552670891,
+        -0.999755099723,
+        0.0182237714554,
+        -0.0198435579556,
+        0.999598781151,
+        0.0130119051815,
+        0.0251588363115,
+        0.0453689425024,
+        -0.0253898008918,
+        0.0179005838253,
+        0.999517347078,
+        0.00786212447038,
+    ]);
+    let left_from_right = b0.inverse() * b1;
+    left.bf = left.fx * left_from_right.translation.vector.norm();
+    let rig = StereoRig {
+        right,
+        left_from_right,
+        body_from_left: b0,
+    };
+    (left, rig)
+}
+
+/// Imaging of the VI-sensor's Aptina MT9V034 (1/3", 6 um pixels, global shutter):
+/// - no rolling shutter: the MT9V034 exposes all rows at once (datasheet: global shutter);
+/// - exposure 5 ms nominal: EuRoC's cameras run auto-exposure, indoors at a few ms; 5 ms
+///   stands for the well-lit Vicon room (the machine hall needs longer; auto-exposure goes up
+///   to 20 ms, then gain up to 4x, the MT9V034's analogue gain range);
+/// - auto-exposure aiming at a mean of 145: the mean grey level of the 95 real V1_01 frames
+///   of ../shared/data/euroc_v101_head (cam0 146, cam1 131); steps of 1/16 EV (the sensor's
+///   gain register counts sixteenths);
+/// - shot and read noise: measured on the same frames, in flat regions (pixels whose 5x5
+///   neighbourhood varies by 6 grey levels or less), with Immerkaer's Laplacian estimator
+///   over every 8th frame: 1.21 grey levels at a mean level of 166 (cam0), 1.17 at 145
+///   (cam1); read 0.8 and 200 electrons per grey level give 1.21 and 1.17;
+/// - vignetting: mean brightness by radius over the 95 frames, fitted with `1 - k r^2`, gives
+///   a corner illumination of 0.85 (cam0) and 0.76 (cam1); the scene's own brightness
+///   dominates those profiles (they rise from the centre to mid radius), so the figure is
+///   rough: 0.8.
+pub fn mt9v034_imaging() -> Imaging {
+    Imaging {
+        exposure: Some(Exposure {
+            time_s: 0.005,
+            samples: 4,
+        }),
+        rolling_shutter: None,
+        vignetting: Some(Vignetting { corner: 0.8 }),
+        auto_exposure: Some(AutoExposure {
+            target: 145.0,
+            rate: 0.25,
+            step_ev: 1.0 / 16.0,
+            max_time_s: 0.02,
+            max_gain: 4.0,
+            history: 20,
+        }),
+        sensor_noise: Some(SensorNoise {
+            read_dn: 0.8,
+            electrons_per_dn: 200.0,
+        }),
+    }
+}
+
+/// The configuration of an EuRoC twin: the calibrated rig, distorted unrectified images, the
+/// MT9V034's imaging, the MAV path and the motion-capture noise.
+fn euroc_config(t: &TwinSpec) -> SynthConfig {
+    let (camera, rig) = euroc_rig();
+    let mut imaging = mt9v034_imaging();
+    if let Some(e) = &mut imaging.exposure {
+        // As for the TUM twins: blur steps of a typical frame under a pixel, 4 to 8 samples.
+        let blur_px = camera.fx * t.mean_angular_deg.to_radians() * e.time_s;
+        e.samples = (2.0 * blur_px).ceil().clamp(4.0, 8.0) as u32;
+    }
+    SynthConfig {
+        camera,
+        trajectory: Trajectory::HandHeld(path(t)),
+        motion_scale: 1.0,
+        image: ImageConfig::default(),
+        imaging,
+        depth_noise: DepthNoise::default(),
+        moving_objects: None,
+        occlusion: None,
+        rig: Some(rig),
+        mocap_noise: t.mocap,
+    }
+}
+
 /// The configuration of a twin.
 pub fn config(t: &TwinSpec) -> SynthConfig {
+    if t.camera == TwinCamera::Euroc {
+        return euroc_config(t);
+    }
     let mut depth_noise = DepthNoise::kinect();
     // Colour and depth come from two free-running 30 Hz streams; TUM pairs them within 20 ms.
     // Depth taken a third of a frame (11 ms) before the colour image.
@@ -401,6 +696,8 @@ pub fn config(t: &TwinSpec) -> SynthConfig {
             bodies: Some(activity),
         }),
         occlusion: None,
+        rig: None,
+        mocap_noise: t.mocap,
     }
 }
 
@@ -482,5 +779,188 @@ mod tests {
             }
             config(t).validate().unwrap();
         }
+    }
+
+    fn euroc_twins() -> impl Iterator<Item = &'static TwinSpec> {
+        TWINS.iter().filter(|t| t.camera == TwinCamera::Euroc)
+    }
+
+    #[test]
+    fn euroc_twins_have_the_papers_speeds_and_twenty_hz() {
+        let names: Vec<_> = euroc_twins().map(|t| t.name).collect();
+        assert_eq!(names, ["twin_v101", "twin_mh01"]);
+        for (name, v, w, s) in [
+            ("twin_v101", 0.41, 0.28, 144.0),
+            ("twin_mh01", 0.44, 0.22, 182.0),
+        ] {
+            let t = twin(name).unwrap();
+            let (pv, pw) = path(t).smooth_speeds();
+            assert!((pv / v - 1.0).abs() < 0.01, "{name}: {pv}");
+            assert!((pw / w - 1.0).abs() < 0.02, "{name}: {pw} rad/s");
+            assert_eq!(frames(t), (s * 20.0) as usize);
+            // A MAV's vibration, not a hand's tremor: far below the hand's shake.
+            let (tp, ta) = path(t).tremor_rms();
+            assert!(tp < 0.5 * TREMOR.position_m && ta < 0.5 * TREMOR.angle_rad);
+        }
+    }
+
+    #[test]
+    fn euroc_rig_is_the_real_calibration() {
+        let (cam, rig) = euroc_rig();
+        assert_eq!((cam.width, cam.height, cam.fps), (752, 480, 20.0));
+        assert_eq!(cam.fx, 458.654);
+        assert_eq!(rig.right.cx, 379.999);
+        assert_eq!(cam.distortion.unwrap().k1, -0.28340811);
+        // cam1 sits 0.110 m along cam0's x axis, nearly parallel.
+        let t = rig.left_from_right.translation.vector;
+        assert!((t.norm() - 0.110).abs() < 0.001 && t.x > 0.109, "{t:?}");
+        let a = rig.left_from_right.rotation.angle();
+        assert!(a < 0.02, "{a}");
+        assert!((cam.baseline() - t.norm()).abs() < 1e-12);
+        // T_BS of cam0: the file's translation, a rotation of about 90 degrees about z.
+        let b = rig.body_from_left;
+        assert!(
+            (b.translation.vector
+                - Vector3::new(-0.0216401454975, -0.064676986768, 0.00981073058949))
+            .norm()
+                < 1e-12
+        );
+        assert!((b.rotation.angle().to_degrees() - 90.0).abs() < 3.0);
+    }
+
+    #[test]
+    fn euroc_twin_images_have_the_mt9v034_size_and_a_global_shutter() {
+        let c = config(twin("twin_v101").unwrap());
+        c.validate().unwrap();
+        assert!(!c.is_rgbd());
+        // Global shutter: no rolling shutter, so every row's instant is the stamp.
+        assert!(c.imaging.rolling_shutter.is_none());
+        let readout = c
+            .imaging
+            .rolling_shutter
+            .as_ref()
+            .map_or(0.0, |r| r.readout_s);
+        for v in 0..480 {
+            assert_eq!(crate::imaging::row_time(v as f64, 480, readout), 0.0);
+        }
+        let gen = crate::Generator::new(c, 3);
+        let f = gen.frame(40);
+        let r = f.right.as_ref().unwrap();
+        assert_eq!((f.gray.width, f.gray.height), (752, 480));
+        assert_eq!((r.width, r.height), (752, 480));
+        // Auto-exposure holds the mean near its target (the real frames' mean, 145).
+        let mean = f.gray.data.iter().map(|&g| g as f64).sum::<f64>() / f.gray.data.len() as f64;
+        assert!((100.0..190.0).contains(&mean), "{mean}");
+        // The two images differ (two cameras, two poses) but see the same scene.
+        assert_ne!(f.gray.data, r.data);
+    }
+
+    #[test]
+    fn mocap_noise_has_its_documented_sigma_and_switches_off() {
+        for (name, noise) in [("twin_v101", VICON), ("twin_mh01", LEICA_MS50)] {
+            let c = config(twin(name).unwrap());
+            assert_eq!(c.mocap_noise, Some(noise));
+            let gen = crate::Generator::new(c.clone(), 11);
+            let n = 3000;
+            let (mut sp, mut sa) = (0.0, 0.0);
+            for i in 0..n {
+                let p = gen.pose(i);
+                let m = gen.measured_pose(&p, i);
+                sp += (m.translation.vector - p.translation.vector).norm_squared();
+                if m.rotation != p.rotation {
+                    sa += (p.rotation.inverse() * m.rotation)
+                        .scaled_axis()
+                        .norm_squared();
+                }
+            }
+            let sp = (sp / (3 * n) as f64).sqrt();
+            let sa = (sa / (3 * n) as f64).sqrt();
+            assert!((sp / noise.position_m - 1.0).abs() < 0.05, "{name}: {sp}");
+            if noise.angle_rad > 0.0 {
+                assert!((sa / noise.angle_rad - 1.0).abs() < 0.05, "{name}: {sa}");
+            } else {
+                assert_eq!(sa, 0.0);
+            }
+            // Switched off: the exact pose.
+            let mut off = c;
+            off.without("mocap_noise").unwrap();
+            let gen = crate::Generator::new(off, 11);
+            for i in [0, 7, 500] {
+                assert_eq!(gen.measured_pose(&gen.pose(i), i), gen.pose(i));
+            }
+        }
+        // The TUM twins keep exact ground truth.
+        assert!(TWINS
+            .iter()
+            .filter(|t| t.camera != TwinCamera::Euroc)
+            .all(|t| t.mocap.is_none()));
+    }
+
+    #[test]
+    fn undistorting_a_euroc_twin_image_recovers_the_pinhole_rendering() {
+        let mut c = config(twin("twin_mh01").unwrap());
+        for e in ["blur", "auto_exposure", "vignetting", "image_noise"] {
+            c.without(e).unwrap();
+        }
+        let mut pinhole = c.clone();
+        pinhole.without("lens").unwrap();
+        let cam = c.camera.clone();
+        let dd = crate::Generator::new(c, 2)
+            .frame(10)
+            .depth_true
+            .unwrap()
+            .data;
+        let dp = crate::Generator::new(pinhole, 2)
+            .frame(10)
+            .depth_true
+            .unwrap()
+            .data;
+        let (w, h) = (752usize, 480usize);
+        let at = |d: &[f32], u: f64, v: f64| -> Option<f64> {
+            let (x0, y0) = (u.floor() as i64, v.floor() as i64);
+            if x0 < 0 || y0 < 0 || x0 + 1 >= w as i64 || y0 + 1 >= h as i64 {
+                return None;
+            }
+            let (x0, y0) = (x0 as usize, y0 as usize);
+            let q = [
+                d[y0 * w + x0],
+                d[y0 * w + x0 + 1],
+                d[(y0 + 1) * w + x0],
+                d[(y0 + 1) * w + x0 + 1],
+            ];
+            let (lo, hi) = q
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+            if hi > lo * 1.01 {
+                return None; // a depth edge
+            }
+            let (fx, fy) = (u - x0 as f64, v - y0 as f64);
+            let top = q[0] as f64 * (1.0 - fx) + q[1] as f64 * fx;
+            let bot = q[2] as f64 * (1.0 - fx) + q[3] as f64 * fx;
+            Some(top * (1.0 - fy) + bot * fy)
+        };
+        let (mut with, mut without) = (Vec::new(), Vec::new());
+        for v in (5..h - 5).step_by(7) {
+            for u in (5..w - 5).step_by(7) {
+                // The pinhole pixel seen at raw pixel (u, v) of the distorted image.
+                let (uu, vu) = cam.undistort_point(u as f64, v as f64);
+                if (uu - u as f64).hypot(vu - v as f64) < 3.0 {
+                    continue;
+                }
+                let z = dd[v * w + u] as f64;
+                if let (Some(a), Some(b)) = (at(&dp, uu, vu), at(&dp, u as f64, v as f64)) {
+                    with.push((z - a).abs() / z);
+                    without.push((z - b).abs() / z);
+                }
+            }
+        }
+        assert!(with.len() > 500, "{}", with.len());
+        let median = |x: &mut Vec<f64>| {
+            x.sort_by(f64::total_cmp);
+            x[x.len() / 2]
+        };
+        let (mw, mo) = (median(&mut with), median(&mut without));
+        assert!(mw < 2e-4, "median relative error {mw}");
+        assert!(mo > 10.0 * mw, "the lens moves pixels: {mo} vs {mw}");
     }
 }
