@@ -68,6 +68,26 @@ const ROLLING_SHUTTER_SAMPLES: usize = 4;
 /// Side length divisor of the auto-exposure metering preview (640x480 meters at 80x60).
 const METER_DIVISOR: u32 = 8;
 
+/// Where the right camera is relative to the left one.
+#[derive(Clone, Copy, Debug)]
+enum Offset {
+    /// A rectified pair: the baseline along x (the arithmetic the `stereo` preset has always
+    /// used, so its bytes stay).
+    Shift(Translation3<f64>),
+    /// A calibrated rig: T_cam0_cam1.
+    Pose(Isometry3<f64>),
+}
+
+impl Offset {
+    /// The right camera's pose given the left one's.
+    fn apply(&self, pose_wc: &Isometry3<f64>) -> Isometry3<f64> {
+        match self {
+            Offset::Shift(t) => pose_wc * t,
+            Offset::Pose(p) => pose_wc * p,
+        }
+    }
+}
+
 /// Generates the frames of one (config, seed) sequence.
 #[derive(Clone, Debug)]
 pub struct Generator {
@@ -334,13 +354,13 @@ impl Generator {
     fn exposed_colour(
         &self,
         t: f64,
-        (camera, offset): (&Camera, Option<Isometry3<f64>>),
+        (camera, offset): (&Camera, Option<Offset>),
         occluded: bool,
         settings: &ExposureSettings,
     ) -> Vec<[f32; 3]> {
         let im = &self.config.imaging;
         let pose_at = |s: f64| match offset {
-            Some(o) => self.pose_at_time(s) * o,
+            Some(o) => o.apply(&self.pose_at_time(s)),
             None => self.pose_at_time(s),
         };
         let (exposure_s, samples) = match &im.exposure {
@@ -479,13 +499,10 @@ impl Generator {
             // The right camera: the calibrated rig's (own intrinsics, distortion and pose), or
             // the left one shifted by the baseline (a rectified pair).
             let (right_cam, offset) = match &self.config.rig {
-                Some(r) => (&r.right, r.left_from_right),
+                Some(r) => (&r.right, Offset::Pose(r.left_from_right)),
                 None => (
                     cam,
-                    Isometry3::from_parts(
-                        Translation3::new(cam.baseline(), 0.0, 0.0),
-                        nalgebra::UnitQuaternion::identity(),
-                    ),
+                    Offset::Shift(Translation3::new(cam.baseline(), 0.0, 0.0)),
                 ),
             };
             let right_colour = if timed {
@@ -495,7 +512,7 @@ impl Generator {
                     scene: &self.scene,
                     placed: &placed,
                     camera: right_cam,
-                    pose_wc: pose_wc * offset,
+                    pose_wc: offset.apply(&pose_wc),
                     occluded,
                 };
                 right_view.render(Some(shading)).colour.unwrap_or_default()
