@@ -846,6 +846,24 @@ mod tests {
     }
 
     #[test]
+    fn every_effect_can_be_removed_from_a_euroc_twin() {
+        let full = SynthConfig::preset("twin_v101").unwrap();
+        for (name, _) in EFFECTS {
+            let mut c = full.clone();
+            c.without(name).unwrap();
+            c.validate().unwrap();
+        }
+        // The lens goes from both cameras of the rig; the mocap noise from the ground truth.
+        let mut c = full.clone();
+        c.without("lens").unwrap();
+        assert!(c.camera.distortion.is_none());
+        assert!(c.rig.as_ref().unwrap().right.distortion.is_none());
+        let mut c = full;
+        c.without("mocap_noise").unwrap();
+        assert!(c.mocap_noise.is_none());
+    }
+
+    #[test]
     fn unknown_preset_lists_valid_names() {
         let e = SynthConfig::preset("noisy").unwrap_err().to_string();
         assert!(
