@@ -409,9 +409,7 @@ pub fn optimize_frame_pose(
         let key = frame.id.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ obs.len() as u64;
         let c = rigid_consensus(camera, params, &initial, &matches, key)?;
         initial = c.tcw;
-        let outlier: Vec<bool> = c.inlier.iter().map(|&i| !i).collect();
-        frame.dynamic = dynamic_mask(frame, params, &index, &outlier);
-        Some(outlier)
+        Some(c.inlier.iter().map(|&i| !i).collect())
     });
     // MC-OR clusters (keyframe poses are fixed during this call) and the current features.
     let clusters: Vec<McorCluster> = match hooks.mcor {
@@ -433,12 +431,17 @@ pub fn optimize_frame_pose(
     let tapped = tap_active();
     // Hook point 2, before every round with the latest pose: re-aim the virtual cameras, then
     // re-run MC-OR (an observation rejected at a poor early pose may come back).
-    let mut gate = |_round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
+    let rc_veto_rounds = hooks.rc.map_or(0, |p| p.veto_rounds);
+    let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
         for (k, r) in &avc {
             r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
         }
         if let Some(out) = &rc_outlier {
-            excluded.copy_from_slice(out);
+            if round < rc_veto_rounds {
+                excluded.copy_from_slice(out);
+            } else {
+                excluded.fill(false);
+            }
         }
         if let Some(params) = hooks.mcor {
             let matches: Vec<McorMatch> = clusters
@@ -462,6 +465,15 @@ pub fn optimize_frame_pose(
         }
     };
     let result = pose_optimization_with(camera, &initial, &obs, cfg, &mut gate);
+    if let (Some(params), Some(out)) = (hooks.rc.filter(|p| p.mask_radius_px > 0.0), &rc_outlier) {
+        // Seeds of the mask: matches outside the consensus that the final pose rejects too.
+        let seeds: Vec<bool> = out
+            .iter()
+            .zip(&result.inliers)
+            .map(|(&o, &inlier)| o && !inlier)
+            .collect();
+        frame.dynamic = dynamic_mask(frame, params, &index, &seeds);
+    }
     frame.tcw = Some(renormalized(&result.pose));
     for (k, &i) in index.iter().enumerate() {
         frame.outliers[i] = !result.inliers[k];
@@ -708,6 +720,81 @@ mod tests {
             "{}",
             (m - g).norm()
         );
+    }
+
+    #[test]
+    fn rc_vetoes_its_rounds_and_masks_from_the_final_verdict() {
+        // Five matches with depth 1.5 m too far. Far away that error moves the stereo
+        // coordinate by less than ORB-SLAM2's gate, and the optimizer alone keeps such a match.
+        let gross = [3, 17, 40, 77, 101];
+        let levels = ScaleLevels::new(8, 1.2);
+        let run = |rc: Option<&RigidConsensusParams>| {
+            let (camera, map, mut frame, _) = scene(&gross);
+            frame.tcw = Some(start_pose());
+            let hooks = NoiseHooks {
+                mcor: None,
+                avc: None,
+                rc,
+            };
+            let counts = optimize_frame_pose(
+                &mut frame,
+                &map,
+                &camera,
+                &levels,
+                &PoseOptConfig::default(),
+                &hooks,
+            );
+            (frame, counts)
+        };
+        let (plain, _) = run(None);
+        let kept_by_the_optimizer: Vec<usize> = gross
+            .iter()
+            .copied()
+            .filter(|&g| !plain.outliers[g])
+            .collect();
+        assert!(!kept_by_the_optimizer.is_empty() && kept_by_the_optimizer.len() < gross.len());
+        for (veto_rounds, mask_radius_px) in [(4, 24.0), (1, 24.0), (1, 0.0)] {
+            let params = RigidConsensusParams {
+                veto_rounds,
+                mask_radius_px,
+                ..RigidConsensusParams::default()
+            };
+            let (frame, counts) = run(Some(&params));
+            let case = format!("veto {veto_rounds}, mask {mask_radius_px}");
+            let kept: Vec<usize> = gross
+                .iter()
+                .copied()
+                .filter(|&g| !frame.outliers[g])
+                .collect();
+            if veto_rounds >= PoseOptConfig::default().rounds {
+                // Vetoed in every round: only what both the consensus and the optimizer keep.
+                assert!(
+                    kept.iter().all(|g| kept_by_the_optimizer.contains(g)),
+                    "{case}"
+                );
+            } else {
+                // Vetoed in the first round only: the optimizer's own test decides after it.
+                assert_eq!(kept, kept_by_the_optimizer, "{case}");
+            }
+            assert!(counts.n_inliers >= 110, "{case}: {counts:?}");
+            assert!(error_m(&frame.tcw.unwrap()) < 0.005, "{case}");
+            // The mask: every match outside the consensus that the final pose rejects too
+            // seeds it (and covers its own keypoint); a radius of 0 turns it off.
+            let masked: Vec<usize> = (0..frame.dynamic.len())
+                .filter(|&i| frame.dynamic[i])
+                .collect();
+            if mask_radius_px > 0.0 {
+                for g in gross.iter().filter(|g| !kept.contains(g)) {
+                    assert!(masked.contains(g), "{case}: {g} not masked ({masked:?})");
+                }
+                for g in &kept {
+                    assert!(!masked.contains(g), "{case}: kept {g} masked");
+                }
+                assert!(masked.len() < 40, "{case}: {} masked", masked.len());
+            } else {
+                assert!(masked.is_empty(), "{case}: {masked:?}");
+            }
+        }
     }
 
     #[test]
