@@ -642,16 +642,21 @@ pub fn mt9v034_imaging() -> Imaging {
     }
 }
 
+/// Enough exposure time samples that the blur steps of a typical frame of twin `t` (twice its
+/// mean angular speed) stay under a pixel: 4 to 8.
+fn set_blur_samples(imaging: &mut Imaging, camera: &Camera, t: &TwinSpec) {
+    if let Some(e) = &mut imaging.exposure {
+        let blur_px = camera.fx * t.mean_angular_deg.to_radians() * e.time_s;
+        e.samples = (2.0 * blur_px).ceil().clamp(4.0, 8.0) as u32;
+    }
+}
+
 /// The configuration of an EuRoC twin: the calibrated rig, distorted unrectified images, the
 /// MT9V034's imaging, the MAV path and the motion-capture noise.
 fn euroc_config(t: &TwinSpec) -> SynthConfig {
     let (camera, rig) = euroc_rig();
     let mut imaging = mt9v034_imaging();
-    if let Some(e) = &mut imaging.exposure {
-        // As for the TUM twins: blur steps of a typical frame under a pixel, 4 to 8 samples.
-        let blur_px = camera.fx * t.mean_angular_deg.to_radians() * e.time_s;
-        e.samples = (2.0 * blur_px).ceil().clamp(4.0, 8.0) as u32;
-    }
+    set_blur_samples(&mut imaging, &camera, t);
     SynthConfig {
         camera,
         trajectory: Trajectory::HandHeld(path(t)),
@@ -677,12 +682,7 @@ pub fn config(t: &TwinSpec) -> SynthConfig {
     depth_noise.lag = Some(DepthLag { frames: 1.0 / 3.0 });
     let camera = t.camera.camera();
     let mut imaging = kinect_imaging();
-    if let Some(e) = &mut imaging.exposure {
-        // Enough time samples that the blur steps of a typical frame (twice the mean angular
-        // speed) stay under a pixel: 4 to 8.
-        let blur_px = camera.fx * t.mean_angular_deg.to_radians() * e.time_s;
-        e.samples = (2.0 * blur_px).ceil().clamp(4.0, 8.0) as u32;
-    }
+    set_blur_samples(&mut imaging, &camera, t);
     SynthConfig {
         camera,
         trajectory: Trajectory::HandHeld(path(t)),
