@@ -240,9 +240,15 @@ pub fn run(args: SweepArgs) -> Result<()> {
         }
     }
     let store = RunStore::open(&args.out, shard)?;
-    let mapping_lag = match (args.mapping_lag, &args.config) {
+    // The config file over the defaults, read once for the folder's settings.
+    let file_config = args
+        .config
+        .as_ref()
+        .map(|p| overlay_file(&Config::default(), p))
+        .transpose()?;
+    let mapping_lag = match (args.mapping_lag, &file_config) {
         (Some(n), _) => n,
-        (None, Some(p)) => overlay_file(&Config::default(), p)?.mapping_lag,
+        (None, Some(c)) => c.mapping_lag,
         (None, None) => 0,
     };
     let vocab_flag = match (&args.vocabulary, &args.config) {
@@ -251,18 +257,16 @@ pub fn run(args: SweepArgs) -> Result<()> {
         (None, None) => None,
     };
     let vocabulary = crate::vocab_file::choose(vocab_flag.as_deref())?;
-    let loop_closing_on = match &args.config {
+    let loop_closing_on = match &file_config {
         _ if args.no_loop_closing => false,
-        Some(p) => overlay_file(&Config::default(), p)?.loop_closing.enabled,
+        Some(c) => c.loop_closing.enabled,
         None => true,
     } && vocabulary.vocabulary.is_some();
     // The reading of the `mcor` and `mcor+avc` columns: the config file's, else the default.
-    let mcor_cluster = match &args.config {
-        Some(p) => overlay_file(&Config::default(), p)?.mcor,
-        None => None,
-    }
-    .unwrap_or_default()
-    .cluster_views;
+    let mcor_cluster = file_config
+        .and_then(|c| c.mcor)
+        .unwrap_or_default()
+        .cluster_views;
     pin_settings(
         &args.out,
         &FolderSettings {
