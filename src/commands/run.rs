@@ -78,7 +78,8 @@ pub struct RunArgs {
     pub synth_seed: u64,
     /// Synthetic sequences: effects to switch off, comma-separated (an ablation): lens, blur,
     /// rolling_shutter, vignetting, auto_exposure, sensor_noise, image_noise, tremor, depth_lag,
-    /// axial, quantisation, lateral, holes, misregistration, depth_distortion, mocap_noise.
+    /// axial, quantisation, lateral, holes, misregistration, depth_distortion, mocap_noise,
+    /// layout.
     #[arg(long = "synth-without", value_name = "EFFECTS", value_delimiter = ',')]
     pub synth_without: Vec<String>,
     /// Data root for catalogued real sequences [default: $NOISEFREE_DATA, else ./data].

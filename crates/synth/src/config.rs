@@ -361,6 +361,33 @@ pub struct SynthConfig {
     /// Motion-capture noise on the ground truth the writers put on disk (and the in-memory
     /// sequence's ground truth); the rendering always uses the exact poses. Off by default.
     pub mocap_noise: Option<MocapNoise>,
+    /// The room and its furniture (default: the office with its fixed furniture).
+    pub scene: SceneSpec,
+}
+
+/// The kind of room a sequence is rendered in ([`crate::layout`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Room {
+    /// The 5 x 5 x 2.7 m office around a desk of every preset (larger with a seeded layout).
+    #[default]
+    Office,
+    /// A motion-capture room like EuRoC's Vicon room: about 8 x 8 x 4 m, its walls lined with
+    /// grey padded mats, a grey carpet with marker strips, a play mat and a checkerboard.
+    ViconRoom,
+    /// An industrial hall like EuRoC's machine hall: about 20 x 14 x 9 m of concrete with
+    /// machines, columns, shelves and crates.
+    MachineHall,
+}
+
+/// The room and how its furniture is placed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneSpec {
+    /// The room.
+    pub room: Room,
+    /// Furniture and clutter drawn from the sequence seed (room size, what stands where, what
+    /// lies on the desk), kept off the camera's lines of sight. Off: the office's fixed
+    /// furniture, or the other rooms' layout of seed 0.
+    pub seeded_layout: bool,
 }
 
 /// An unrectified stereo rig as a calibration describes it (EuRoC's `sensor.yaml` pair): the
@@ -408,6 +435,7 @@ impl Default for SynthConfig {
             occlusion: None,
             rig: None,
             mocap_noise: None,
+            scene: SceneSpec::default(),
         }
     }
 }
@@ -611,7 +639,7 @@ impl fmt::Display for Preset {
 
 /// The effects a configuration can be stripped of one at a time ([`SynthConfig::without`]),
 /// with what each removes: the names of an ablation.
-pub const EFFECTS: [(&str, &str); 16] = [
+pub const EFFECTS: [(&str, &str); 17] = [
     (
         "lens",
         "lens distortion written into the images (the camera becomes a pinhole)",
@@ -650,7 +678,11 @@ pub const EFFECTS: [(&str, &str); 16] = [
     ("depth_distortion", "systematic depth distortion"),
     (
         "mocap_noise",
-        "motion-capture noise on the written ground truth (the EuRoC twins')",
+        "motion-capture noise on the written ground truth",
+    ),
+    (
+        "layout",
+        "furniture and clutter drawn from the seed (back to the room's fixed layout)",
     ),
 ];
 
@@ -695,6 +727,7 @@ impl SynthConfig {
             "misregistration" => d.misregistration = None,
             "depth_distortion" => d.distortion = None,
             "mocap_noise" => self.mocap_noise = None,
+            "layout" => self.scene.seeded_layout = false,
             _ => {
                 return Err(SynthError::UnknownName {
                     what: "effect",

@@ -8,10 +8,10 @@ use std::sync::{Arc, Mutex};
 use nalgebra::{Isometry3, Translation3};
 use slam_core::{Camera, DepthImage, FrameInput, GrayImage};
 
-use crate::config::Supersampling;
-use crate::config::SynthConfig;
+use crate::config::{SceneSpec, Supersampling, SynthConfig};
 use crate::hash::{NoiseKey, Stream};
 use crate::imaging::ExposureSettings;
+use crate::layout::SightLine;
 use crate::noise::{
     exposed_gray8, exposed_rgb8, noisy_gray8, noisy_rgb8, rgb_to_gray, sensor_depth, Photometry,
 };
@@ -88,6 +88,26 @@ impl Offset {
     }
 }
 
+/// The scene of (config, seed): the configured room, its furniture kept off the camera's
+/// lines of sight every quarter second of the path (the first minute of a path without end).
+fn build_scene(config: &SynthConfig, seed: u64) -> Scene {
+    let moving = config.moving_objects.as_ref();
+    let people = moving.is_some_and(|m| m.bodies.is_some());
+    if config.scene == SceneSpec::default() {
+        return Scene::new(seed, moving);
+    }
+    let duration = config.trajectory.duration().unwrap_or(60.0);
+    let sight: Vec<SightLine> = (0..=(duration / 0.25).floor() as usize)
+        .map(|k| {
+            let pose = pose_at(&config.trajectory, (k as f64 * 0.25).min(duration));
+            let axis = pose.rotation * nalgebra::Vector3::z();
+            SightLine::new(pose.translation.vector, axis)
+        })
+        .collect();
+    let layout = crate::layout::layout(&config.scene, seed, &sight, people);
+    Scene::with_layout(seed, moving, &layout)
+}
+
 /// Generates the frames of one (config, seed) sequence.
 #[derive(Clone, Debug)]
 pub struct Generator {
@@ -103,7 +123,7 @@ impl Generator {
     /// A generator for `config` and `seed`. The scene's textures are drawn here (tens of ms).
     /// Use [`Generator::try_new`] for configurations coming from users.
     pub fn new(config: SynthConfig, seed: u64) -> Self {
-        let scene = Arc::new(Scene::new(seed, config.moving_objects.as_ref()));
+        let scene = Arc::new(build_scene(&config, seed));
         Generator {
             config,
             seed,

@@ -29,6 +29,7 @@ pub mod generator;
 pub mod handheld;
 pub mod hash;
 pub mod imaging;
+pub mod layout;
 pub mod noise;
 pub mod people;
 pub mod recorded;

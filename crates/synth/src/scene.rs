@@ -1,16 +1,19 @@
-//! The indoor scene: a textured room (floor, ceiling, four walls), a table with legs, boxes,
-//! a monitor panel and cylinders standing in front of each other (so depth boundaries are
-//! common, the paper's Fig. 2), and optional walking "people" (textured boxes / cylinders).
+//! The indoor scene: a textured room (floor, ceiling, four walls) with the furniture of a
+//! [`crate::layout::Layout`] standing in front of each other (so depth boundaries are common,
+//! the paper's Fig. 2), and optional walking "people" (articulated bodies, or textured boxes /
+//! cylinders).
 //!
-//! World frame: x, y horizontal, z up, metres; the room spans x, y in [-2.5, 2.5], z in [0, 2.7].
-//! The layout is fixed (so every trajectory sees textured content within sensor range); the
-//! textures are drawn from a `ChaCha8Rng` seeded with the sequence seed.
+//! World frame: x, y horizontal, z up, metres; the presets' office spans x, y in [-2.5, 2.5],
+//! z in [0, 2.7] with fixed furniture (so every trajectory sees textured content within sensor
+//! range); the twins' rooms are drawn from the seed ([`crate::layout`]). The textures are drawn
+//! from a `ChaCha8Rng` seeded with the sequence seed.
 
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::config::MovingObjects;
+use crate::config::{MovingObjects, SceneSpec};
+use crate::layout::{Layout, RoomBox};
 use crate::people::{part_shapes, PartPose, Person, CHAIRS};
 use crate::texture::{Style, Texture};
 
@@ -150,21 +153,8 @@ pub struct Scene {
     pub light: Vector3<f64>,
     /// Articulated people (their parts are objects with `body` set).
     pub people: Vec<Person>,
-}
-
-fn cuboid(centre: [f64; 3], half: [f64; 3], yaw: f64) -> (Shape, [f64; 3], f64) {
-    (Shape::Cuboid { half }, centre, yaw)
-}
-
-fn cylinder(x: f64, y: f64, z0: f64, radius: f64, height: f64) -> (Shape, [f64; 3], f64) {
-    (
-        Shape::Cylinder {
-            radius,
-            half_height: height / 2.0,
-        },
-        [x, y, z0 + height / 2.0],
-        0.0,
-    )
+    /// The room's box.
+    pub room: RoomBox,
 }
 
 impl Shape {
@@ -239,41 +229,6 @@ fn add_chairs(objects: &mut Vec<Object>, textures: &mut Vec<Texture>, rng: &mut 
     }
 }
 
-/// Index in [`static_layout`] of the first object standing on the floor (the ones before are
-/// the table and what stands on it).
-const FIRST_FLOOR_OBJECT: usize = 11;
-
-/// The fixed furniture of the room (shape, centre, yaw): a table with legs and things on it,
-/// a cabinet, boxes, a pillar, a shelf, a bin. The same for every seed (only textures vary).
-fn static_layout() -> Vec<(Shape, [f64; 3], f64)> {
-    let table_top = 0.75;
-    vec![
-        // Table top and legs.
-        cuboid([0.0, 1.0, table_top - 0.025], [0.8, 0.45, 0.025], 0.0),
-        cuboid([-0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
-        cuboid([0.75, 0.6, 0.35], [0.025, 0.025, 0.35], 0.0),
-        cuboid([-0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
-        cuboid([0.75, 1.4, 0.35], [0.025, 0.025, 0.35], 0.0),
-        // On the table: boxes, a book, a monitor panel, a bottle and a pot.
-        cuboid([-0.45, 0.9, table_top + 0.10], [0.12, 0.09, 0.10], 0.3),
-        cuboid([0.42, 1.15, table_top + 0.17], [0.15, 0.12, 0.17], -0.4),
-        cuboid([0.05, 0.75, table_top + 0.025], [0.14, 0.10, 0.025], 0.15),
-        cuboid([-0.15, 1.36, table_top + 0.25], [0.3, 0.02, 0.2], 0.0),
-        cylinder(-0.12, 1.1, table_top, 0.045, 0.24),
-        cylinder(0.62, 0.78, table_top, 0.07, 0.18),
-        // On the floor: cabinet, boxes, a pillar, a shelf, a bin.
-        cuboid([-1.6, 1.9, 0.6], [0.45, 0.3, 0.6], 0.0),
-        cuboid([1.45, 1.55, 0.3], [0.3, 0.3, 0.3], 0.5),
-        cuboid([1.45, 1.55, 0.75], [0.2, 0.18, 0.15], 0.2),
-        cylinder(-1.3, 0.3, 0.0, 0.15, 1.8),
-        cuboid([2.0, -1.5, 0.4], [0.35, 0.25, 0.4], 0.2),
-        cuboid([-2.0, -1.2, 0.5], [0.3, 0.4, 0.5], 0.0),
-        cylinder(0.8, -2.0, 0.0, 0.2, 0.6),
-        cuboid([-0.5, -2.25, 0.8], [0.6, 0.2, 0.8], 0.0),
-        cuboid([2.2, 0.4, 1.0], [0.25, 0.6, 1.0], 0.0),
-    ]
-}
-
 /// Signed distance (metres) from a point in the object's local frame to a shape: negative
 /// inside.
 fn shape_sdf(shape: &Shape, l: &Vector3<f64>) -> f64 {
@@ -305,7 +260,7 @@ fn shape_sdf(shape: &Shape, l: &Vector3<f64>) -> f64 {
 pub fn furniture_clearance(q: &Vector3<f64>) -> f64 {
     static LAYOUT: std::sync::OnceLock<Vec<(Shape, [f64; 3], f64)>> = std::sync::OnceLock::new();
     LAYOUT
-        .get_or_init(static_layout)
+        .get_or_init(crate::layout::fixed_office_shapes)
         .iter()
         .map(|(shape, c, yaw)| {
             let r = q - Vector3::new(c[0], c[1], c[2]);
@@ -317,46 +272,43 @@ pub fn furniture_clearance(q: &Vector3<f64>) -> f64 {
 }
 
 impl Scene {
-    /// Builds the room with textures drawn from `seed`, plus `moving` walking objects.
+    /// Builds the fixed office with textures drawn from `seed`, plus `moving` walking objects.
     pub fn new(seed: u64, moving: Option<&MovingObjects>) -> Scene {
+        let people = moving.is_some_and(|m| m.bodies.is_some());
+        let layout = crate::layout::layout(&SceneSpec::default(), seed, &[], people);
+        Scene::with_layout(seed, moving, &layout)
+    }
+
+    /// Builds `layout`'s room and furniture with textures drawn from `seed`, plus `moving`
+    /// walking objects.
+    pub fn with_layout(seed: u64, moving: Option<&MovingObjects>, layout: &Layout) -> Scene {
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5CE4_E5EE_D000_0001);
-        let h = ROOM_HALF;
-        // A scene with people is an office: plain walls with a few posters, carpet tiles,
-        // plain cabinets; only the desk and what stands on it keep the dense collage.
-        let office = moving.is_some_and(|m| m.bodies.is_some());
-        let (floor, ceiling, wall) = if office {
-            (Style::OfficeFloor, Style::OfficeFloor, Style::OfficeWall)
-        } else {
-            (Style::Carpet, Style::Poster, Style::Poster)
-        };
+        let room = layout.room;
+        let [hx, hy] = room.half;
+        let texel = layout.face_texel_m;
+        let f = &layout.faces;
         let mut textures = vec![
-            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.004, floor),
-            Texture::collage(&mut rng, 2.0 * h, 2.0 * h, 0.01, ceiling),
+            Texture::collage(&mut rng, 2.0 * hx, 2.0 * hy, texel, f[0]),
+            Texture::collage(&mut rng, 2.0 * hx, 2.0 * hy, texel.max(0.01), f[1]),
         ];
-        for _ in 0..4 {
+        for (k, style) in f[2..].iter().enumerate() {
+            let width = if k < 2 { 2.0 * hy } else { 2.0 * hx };
             textures.push(Texture::collage(
                 &mut rng,
-                2.0 * h,
-                ROOM_HEIGHT,
-                0.004,
-                wall,
+                width,
+                room.height,
+                texel,
+                *style,
             ));
         }
-        let mut statics = static_layout();
         let mut objects = Vec::new();
-        for (i, (shape, centre, yaw)) in statics.drain(..).enumerate() {
-            let (tw, th) = shape.texture_size();
-            let style = match i {
-                0 => Style::Desk,
-                // Cabinets, boxes, pillar and shelves on the floor.
-                i if office && i >= FIRST_FLOOR_OBJECT => Style::OfficeWall,
-                _ => Style::Poster,
-            };
-            textures.push(Texture::collage(&mut rng, tw, th, 0.0025, style));
+        for (i, o) in layout.objects.iter().enumerate() {
+            let (tw, th) = o.shape.texture_size();
+            textures.push(Texture::collage(&mut rng, tw, th, 0.0025, o.style));
             objects.push(Object {
-                shape,
-                centre,
-                yaw,
+                shape: o.shape,
+                centre: o.centre,
+                yaw: o.yaw,
                 texture: textures.len() - 1,
                 id: 10 + i as u16,
                 walk: None,
@@ -452,8 +404,9 @@ impl Scene {
         Scene {
             objects,
             textures,
-            light: Vector3::new(0.3, 0.0, 2.6),
+            light: layout.light,
             people,
+            room,
         }
     }
 
@@ -500,7 +453,7 @@ impl Scene {
     /// Nearest hit of the ray o + t d (t > 0) with the room and the placed objects.
     #[inline]
     pub fn intersect(&self, placed: &[Placed], o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
-        let mut best = room_hit(o, d);
+        let mut best = room_hit(&self.room, o, d);
         let dd = d.dot(d);
         let inv_len = 1.0 / dd.sqrt();
         for p in placed {
@@ -544,14 +497,14 @@ impl Scene {
     /// Unsigned distance (metres) from world point `q` to the nearest surface of the room or
     /// of a placed object: an independent check of the ray-caster used by tests.
     pub fn surface_distance(&self, placed: &[Placed], q: &Vector3<f64>) -> f64 {
-        let h = ROOM_HALF;
-        let mut best = (q.x + h)
+        let [hx, hy] = self.room.half;
+        let mut best = (q.x + hx)
             .abs()
-            .min((h - q.x).abs())
-            .min((q.y + h).abs())
-            .min((h - q.y).abs())
+            .min((hx - q.x).abs())
+            .min((q.y + hy).abs())
+            .min((hy - q.y).abs())
             .min(q.z.abs())
-            .min((ROOM_HEIGHT - q.z).abs());
+            .min((self.room.height - q.z).abs());
         for p in placed {
             let l = p.world_to_local(&(q - p.centre));
             let sdf = shape_sdf(&self.objects[p.object].shape, &l);
@@ -563,10 +516,10 @@ impl Scene {
 
 /// Exit of the ray from the inside of the room box.
 #[inline]
-fn room_hit(o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
-    let h = ROOM_HALF;
-    let lo = [-h, -h, 0.0];
-    let hi = [h, h, ROOM_HEIGHT];
+fn room_hit(room: &RoomBox, o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
+    let [hx, hy] = room.half;
+    let lo = [-hx, -hy, 0.0];
+    let hi = [hx, hy, room.height];
     let mut best_t = f64::INFINITY;
     let mut face = 0usize;
     for a in 0..3 {
@@ -587,12 +540,12 @@ fn room_hit(o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
     let p = o + d * best_t;
     // face: 0 -x, 1 +x, 2 -y, 3 +y, 4 floor, 5 ceiling.
     let (normal, texture, st) = match face {
-        0 => (Vector3::x(), 2, (p.y + h, p.z)),
-        1 => (-Vector3::x(), 3, (h - p.y, p.z)),
-        2 => (Vector3::y(), 4, (h - p.x, p.z)),
-        3 => (-Vector3::y(), 5, (p.x + h, p.z)),
-        4 => (Vector3::z(), 0, (p.x + h, p.y + h)),
-        _ => (-Vector3::z(), 1, (p.x + h, p.y + h)),
+        0 => (Vector3::x(), 2, (p.y + hy, p.z)),
+        1 => (-Vector3::x(), 3, (hy - p.y, p.z)),
+        2 => (Vector3::y(), 4, (hx - p.x, p.z)),
+        3 => (-Vector3::y(), 5, (p.x + hx, p.z)),
+        4 => (Vector3::z(), 0, (p.x + hx, p.y + hy)),
+        _ => (-Vector3::z(), 1, (p.x + hx, p.y + hy)),
     };
     Hit {
         t: best_t,

@@ -28,6 +28,22 @@ pub enum Style {
     /// A head wrapped on a cylinder (u round it from behind, v up): skin, hair on top and at
     /// the back, eyes and mouth at the front.
     Head,
+    /// A padded gym mat as EuRoC's Vicon rooms line their walls with: grey fabric with faint
+    /// shading and darker quilting seams every 25-50 cm (seen on the real V1_01 frames: big,
+    /// nearly textureless surfaces).
+    Mat,
+    /// Curtain or plain panel: a light surface with soft vertical folds (the Vicon room's
+    /// walls above the mats).
+    Curtain,
+    /// A black tape strip with white chips, as the markers laid on the Vicon room's floor.
+    MarkerStrip,
+    /// A black-and-white calibration checkerboard of 5 cm squares.
+    Checker,
+    /// Concrete or painted industrial surface: large grey slabs with stains, a few painted
+    /// lines and signs (the machine hall's floor and walls).
+    Concrete,
+    /// Machinery: a painted body in panels with labels, vents and bolts.
+    Machine,
 }
 
 /// An RGB texture covering `width_m` x `height_m` metres of a surface.
@@ -194,6 +210,92 @@ impl Texture {
                     front + 0.025,
                     0.25 * hm,
                     [120, 50, 50],
+                );
+            }
+            Style::Mat => {
+                let grey = [rng.random_range(110.0..170.0), rng.random_range(0.0..0.15)];
+                t.shaded_patchwork(rng, wm, hm, (0.3, 1.0), grey, 4.0);
+                let seam = rng.random_range(0.25..0.5);
+                let dark = (grey[0] - rng.random_range(18.0..30.0)) as u8;
+                let mut y = seam;
+                while y < hm {
+                    t.fill_rect(0.0, y - 0.008, wm, y + 0.008, [dark; 3]);
+                    y += seam;
+                }
+                // Scuffs.
+                t.scatter(rng, wm, hm, &[(0.04, 0.004)], 0.0, texel_m);
+            }
+            Style::Curtain => {
+                let base: f64 = rng.random_range(185.0..235.0);
+                let mut x = 0.0;
+                while x < wm {
+                    let w = rng.random_range(0.08..0.25);
+                    let l = (base + rng.random_range(-9.0..9.0)).clamp(0.0, 255.0) as u8;
+                    t.fill_rect(x, 0.0, x + w, hm, [l; 3]);
+                    x += w;
+                }
+            }
+            Style::MarkerStrip => {
+                let black = rng.random_range(15..35);
+                t.fill_rect(0.0, 0.0, wm, hm, [black; 3]);
+                let n = (wm * hm / 0.0025).ceil() as usize;
+                for _ in 0..n {
+                    let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
+                    let (hw, hh) = (rng.random_range(0.006..0.02), rng.random_range(0.003..0.01));
+                    let a = rng.random_range(0.0..std::f64::consts::PI);
+                    let (ca, sa) = (a.cos(), a.sin());
+                    let p = |x: f64, y: f64| (cx + ca * x - sa * y, cy + sa * x + ca * y);
+                    let white = rng.random_range(200..=250);
+                    t.fill_polygon(
+                        &[p(-hw, -hh), p(hw, -hh), p(hw, hh), p(-hw, hh)],
+                        [white; 3],
+                    );
+                }
+            }
+            Style::Checker => {
+                let sq = 0.05;
+                t.fill_rect(0.0, 0.0, wm, hm, [235; 3]);
+                let (nx, ny) = ((wm / sq) as usize, (hm / sq) as usize);
+                for j in 1..ny.saturating_sub(1) {
+                    for i in 1..nx.saturating_sub(1) {
+                        if (i + j) % 2 == 0 {
+                            let (x, y) = (i as f64 * sq, j as f64 * sq);
+                            t.fill_rect(x, y, x + sq, y + sq, [20; 3]);
+                        }
+                    }
+                }
+            }
+            Style::Concrete => {
+                let grey = [rng.random_range(95.0..150.0), rng.random_range(0.0..0.12)];
+                t.shaded_patchwork(rng, wm, hm, (0.8, 3.0), grey, 9.0);
+                // Stains and cracks, then a few painted lines and signs.
+                t.scatter(rng, wm, hm, &[(0.3, 0.02), (0.08, 0.01)], 0.0, texel_m);
+                let lines = (wm * hm / 20.0).ceil() as usize;
+                for _ in 0..lines {
+                    let paint = [230, rng.random_range(170..220), rng.random_range(0..60)];
+                    let y = rng.random_range(0.0..hm);
+                    t.fill_rect(0.0, y, wm, y + 0.08, paint);
+                }
+                let signs = (wm * hm / 15.0).ceil() as usize;
+                for _ in 0..signs {
+                    let (pw, ph) = (rng.random_range(0.2..0.6), rng.random_range(0.2..0.6));
+                    let x0 = rng.random_range(0.0..(wm - pw).max(1e-3));
+                    let y0 = rng.random_range(0.0..(hm - ph).max(1e-3));
+                    let sign = Texture::collage(rng, pw, ph, texel_m, Style::Poster);
+                    t.blit(&sign, x0, y0);
+                }
+            }
+            Style::Machine => {
+                let paint = [rng.random_range(60.0..190.0), rng.random_range(0.1..0.6)];
+                t.shaded_patchwork(rng, wm, hm, (0.2, 0.8), paint, 25.0);
+                // Labels, vents, bolts and cables.
+                t.scatter(
+                    rng,
+                    wm,
+                    hm,
+                    &[(0.12, 0.06), (0.04, 0.05), (0.015, 0.03)],
+                    0.3,
+                    texel_m,
                 );
             }
         }

@@ -40,6 +40,10 @@ fn edge_room() -> Scene {
         textures,
         light: Vector3::new(0.0, 0.0, 2.6),
         people: Vec::new(),
+        room: synth::layout::RoomBox {
+            half: [ROOM_HALF; 2],
+            height: ROOM_HEIGHT,
+        },
     }
 }
 
