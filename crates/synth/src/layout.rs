@@ -4,7 +4,8 @@
 //!
 //! A seeded layout keeps its furniture off the camera's lines of sight ([`SightLine`]): a real
 //! sequence is recorded where the camera can see what it was pointed at, so nothing may stand
-//! within half a metre of the camera or of the first two metres of its optical axis. The
+//! within 0.4 m of the camera or of the first 1.2 m of its optical axis (further away, a
+//! turning camera would leave no place for anything). The
 //! desk of the office stays where the twins' paths look (table top at (0, 1, 0.75)); what lies
 //! on it and what stands around it changes.
 //!
@@ -57,7 +58,7 @@ pub struct Layout {
 }
 
 /// A stretch of the camera's view that furniture must stay clear of: from the camera centre
-/// (`eye`) to `end`, two metres along the optical axis (or where it meets the floor).
+/// (`eye`) to `end`, [`SIGHT_CLEAR_M`] along the optical axis (or where it meets the floor).
 #[derive(Clone, Copy, Debug)]
 pub struct SightLine {
     /// Camera centre, world metres.
@@ -67,10 +68,10 @@ pub struct SightLine {
 }
 
 /// Length of the optical axis kept clear of furniture, metres.
-pub const SIGHT_CLEAR_M: f64 = 2.0;
+pub const SIGHT_CLEAR_M: f64 = 1.2;
 /// Horizontal gap kept between furniture and a line of sight, metres (on top of the object's
 /// footprint radius).
-const SIGHT_MARGIN_M: f64 = 0.5;
+const SIGHT_MARGIN_M: f64 = 0.4;
 
 impl SightLine {
     /// The kept-clear stretch of a camera at `eye` looking along unit `axis`.
