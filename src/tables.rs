@@ -280,8 +280,16 @@ pub fn table3(
             }
         } else {
             ""
-        }
+        },
     );
+    let notes = if settings.synth_without.is_empty() {
+        notes
+    } else {
+        format!(
+            "{notes} Synthetic sequences rendered without: {} (--synth-without).",
+            settings.synth_without.join(", ")
+        )
+    };
     render("Table III: ATE RMSE (m)", &notes, &header, &rows)
 }
 

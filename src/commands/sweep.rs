@@ -275,6 +275,12 @@ pub fn run(args: SweepArgs) -> Result<()> {
             vocabulary: vocabulary.identity.clone(),
             loop_closing: loop_closing_on,
             mcor_cluster,
+            synth_without: {
+                let mut w = args.synth_without.clone();
+                w.sort();
+                w.dedup();
+                w
+            },
         },
     )?;
     let mine: Vec<&Job> = all_jobs

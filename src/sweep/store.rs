@@ -100,6 +100,9 @@ pub struct FolderSettings {
     /// MC-OR's cluster reading of the `mcor` and `mcor+avc` runs (the kinds that name their
     /// reading, such as `mcor-keyframes`, say it themselves).
     pub mcor_cluster: ClusterViews,
+    /// The synthetic effects switched off in every run (`--synth-without`), sorted; empty: all
+    /// on. Runs of one sequence without different effects are different sequences.
+    pub synth_without: Vec<String>,
 }
 
 impl Default for FolderSettings {
@@ -111,6 +114,7 @@ impl Default for FolderSettings {
             vocabulary: "none".into(),
             loop_closing: false,
             mcor_cluster: ClusterViews::Keyframes,
+            synth_without: Vec::new(),
         }
     }
 }
@@ -153,11 +157,29 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
                     path.display()
                 ),
             };
+            // Absent: every effect on (folders from before the field had no other runs).
+            let synth_without = match v.get("synth_without") {
+                None => Vec::new(),
+                Some(x) => x
+                    .as_array()
+                    .and_then(|a| {
+                        a.iter()
+                            .map(|e| e.as_str().map(str::to_string))
+                            .collect::<Option<Vec<_>>>()
+                    })
+                    .with_context(|| {
+                        format!(
+                            "{}: synth_without is not a list of effect names",
+                            path.display()
+                        )
+                    })?,
+            };
             Ok(FolderSettings {
                 mapping_lag,
                 vocabulary,
                 loop_closing,
                 mcor_cluster,
+                synth_without,
             })
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(FolderSettings::default()),
@@ -227,8 +249,24 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
                 recorded.mcor_cluster.name()
             );
         }
+        if recorded.synth_without != settings.synth_without {
+            let says = |w: &[String]| {
+                if w.is_empty() {
+                    "every synthetic effect on".to_string()
+                } else {
+                    format!("--synth-without {}", w.join(","))
+                }
+            };
+            bail!(
+                "{} holds runs made with {}; this sweep has {}: use another --out folder (the \
+                 same sequence without other effects is another sequence)",
+                dir.display(),
+                says(&recorded.synth_without),
+                says(&settings.synth_without)
+            );
+        }
     }
-    let text = format!(
+    let mut text = format!(
         "# how every run in this folder was made (a sweep with other settings is refused here)\n\
          mapping_lag = {}\nvocabulary = {:?}\nloop_closing = {}\nmcor_cluster = {:?}\n",
         settings.mapping_lag,
@@ -236,6 +274,9 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
         settings.loop_closing,
         settings.mcor_cluster.name()
     );
+    if !settings.synth_without.is_empty() {
+        text += &format!("synth_without = {:?}\n", settings.synth_without);
+    }
     ate_eval::io::write_atomic(&path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
 }
@@ -488,6 +529,7 @@ mod tests {
             vocabulary: "v".into(),
             loop_closing: true,
             mcor_cluster: ClusterViews::EveryFrame,
+            synth_without: Vec::new(),
         };
         pin_settings(&d, &every).unwrap();
         assert_eq!(settings_of(&d).unwrap(), every);
@@ -515,5 +557,36 @@ mod tests {
             e.contains(SETTINGS_FILE) && e.contains("mcor_cluster"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_folder_pins_the_synthetic_effects_switched_off() {
+        let d = tmpdir("pin-without");
+        let s = RunStore::open(&d, None).unwrap();
+        let without = FolderSettings {
+            synth_without: vec!["blur".into(), "lens".into()],
+            ..FolderSettings::default()
+        };
+        pin_settings(&d, &without).unwrap();
+        assert_eq!(settings_of(&d).unwrap(), without);
+        s.append(&rec("a", 0)).unwrap();
+        drop(s);
+        let all_on = FolderSettings::default();
+        let e = format!("{:#}", pin_settings(&d, &all_on).unwrap_err());
+        assert!(
+            e.contains("--synth-without blur,lens") && e.contains("every synthetic effect on"),
+            "{e}"
+        );
+        pin_settings(&d, &without).unwrap();
+        // A folder with every effect on does not record the field, and reads back as such.
+        let on = tmpdir("pin-without-on");
+        std::fs::create_dir_all(&on).unwrap();
+        pin_settings(&on, &all_on).unwrap();
+        let text = std::fs::read_to_string(on.join(SETTINGS_FILE)).unwrap();
+        assert!(!text.contains("synth_without"), "{text}");
+        assert_eq!(settings_of(&on).unwrap(), all_on);
+        std::fs::write(on.join(SETTINGS_FILE), "synth_without = \"blur\"\n").unwrap();
+        let e = format!("{:#}", settings_of(&on).unwrap_err());
+        assert!(e.contains("synth_without"), "{e}");
     }
 }
