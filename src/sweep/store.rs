@@ -580,7 +580,7 @@ mod tests {
         pin_settings(&d, &without).unwrap();
         // A folder with every effect on does not record the field, and reads back as such.
         let on = tmpdir("pin-without-on");
-        std::fs::create_dir_all(&on).unwrap();
+        drop(RunStore::open(&on, None).unwrap());
         pin_settings(&on, &all_on).unwrap();
         let text = std::fs::read_to_string(on.join(SETTINGS_FILE)).unwrap();
         assert!(!text.contains("synth_without"), "{text}");
