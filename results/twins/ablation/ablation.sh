@@ -1,20 +1,62 @@
 #!/usr/bin/env bash
-# Baseline ATE on a twin with each effect alone, none, and all (orb, seed 0, N frames).
-set -u
-SEQ=${1:-twin_fr1_desk}; N=${2:-300}; OUT=${3:-/tmp/ablation}
+# Baseline (orb) ATE on a twin with every effect, with none, and with each effect alone:
+# one sweep folder per variant (n runs, --mapping-lag 3; each folder pins what it was rendered
+# without), then ablation.md / ablation.csv assembled from the folders' Table III.
+#   results/twins/ablation/ablation.sh [SEQ] [RUNS] [OUT]
+# "none" is the twin with every listed effect off: a pinhole camera in the fixed office,
+# exact ground truth, noise-free images and depth; "only_X" adds X alone to "none".
+set -euo pipefail
+SEQ=${1:-twin_fr1_desk}
+RUNS=${2:-10}
+OUT=${3:-results/twins/ablation}
 BIN=${NOISEFREE:-target/release/noisefree}
-ALL="lens blur rolling_shutter vignetting auto_exposure sensor_noise tremor depth_lag axial quantisation lateral holes"
-mkdir -p $OUT
-run() { # name, without-list
-  local name=$1 without=$2
-  local args=()
-  [ -n "$without" ] && args=(--synth-without "$without")
-  $BIN run --seq $SEQ --frames $N --quiet --out $OUT/$name "${args[@]}" 2>&1 | tail -1 | sed "s/^/$name: /"
+ALL="lens blur rolling_shutter vignetting auto_exposure sensor_noise tremor depth_lag axial \
+quantisation lateral holes mocap_noise layout"
+mkdir -p "$OUT"
+
+sweep() { # name, comma-separated effects to switch off (may be empty)
+  local dir="$OUT/$SEQ/$1"
+  local args=(--seq "$SEQ" --configs orb --runs "$RUNS" --mapping-lag 3 --jobs 1 --quiet --out "$dir")
+  [ -n "$2" ] && args+=(--synth-without "$2")
+  "$BIN" sweep "${args[@]}" >/dev/null
+  "$BIN" table "$dir" >/dev/null
 }
-run all ""
-run none "$(echo $ALL image_noise | tr ' ' ',')"
+
+all_but() { # the effects except $1, plus the constant image noise unless $1 is sensor noise
+  local w=""
+  for y in $ALL; do [ "$y" != "$1" ] && w="$w$y,"; done
+  if [ "$1" = sensor_noise ]; then echo "${w%,}"; else echo "${w}image_noise"; fi
+}
+
+variants="all none"
+sweep all ""
+sweep none "$(all_but '')"
 for x in $ALL; do
-  others=$(for y in $ALL; do [ $y != $x ] && echo -n "$y,"; done)
-  if [ $x = sensor_noise ]; then w=${others%,}; else w=${others}image_noise; fi
-  run "only_$x" "$w"
+  sweep "only_$x" "$(all_but "$x")"
+  variants="$variants only_$x"
 done
+
+# The ORB-SLAM2 cell of each folder's Table III (mean ± std over the runs, failures marked).
+{
+  echo "variant,effects on,ATE RMSE (m)"
+  for v in $variants; do
+    cell=$(awk -F, 'NR == 2 { print $3 }' "$OUT/$SEQ/$v/table3.csv")
+    case $v in
+      all) on="every effect" ;;
+      none) on="none" ;;
+      *) on="${v#only_}" ;;
+    esac
+    echo "$v,$on,$cell"
+  done
+} > "$OUT/$SEQ.csv.tmp" && mv "$OUT/$SEQ.csv.tmp" "$OUT/$SEQ.csv"
+{
+  echo "## Ablation on $SEQ: ORB-SLAM2 baseline, $RUNS runs per variant (--mapping-lag 3)"
+  echo
+  echo "| variant | effects on | ATE RMSE (m) |"
+  echo "|---|---|---|"
+  tail -n +2 "$OUT/$SEQ.csv" | awk -F, '{ printf "| %s | %s | %s |\n", $1, $2, $3 }'
+  echo
+  echo "Mean ± population std over seeds 0..$((RUNS - 1)); each variant is its own sweep folder"
+  echo "under $SEQ/ (its sweep-settings.toml names the effects it was rendered without)."
+} > "$OUT/$SEQ.md.tmp" && mv "$OUT/$SEQ.md.tmp" "$OUT/$SEQ.md"
+echo "wrote $OUT/$SEQ.md"
