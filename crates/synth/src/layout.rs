@@ -295,6 +295,22 @@ fn against_wall(rng: &mut ChaCha8Rng, room: &RoomBox, depth: f64, gap: f64) -> (
     }
 }
 
+/// Ranges of the half extents (x, y, z) of the boxes on a desk: a box, a book, a monitor.
+const DESK_BOXES: [[(f64, f64); 3]; 3] = [
+    [(0.06, 0.16), (0.05, 0.13), (0.04, 0.18)],
+    [(0.08, 0.15), (0.06, 0.11), (0.01, 0.03)],
+    [(0.18, 0.3), (0.02, 0.02), (0.13, 0.22)],
+];
+
+/// A value uniform in `[r.0, r.1)`, or `r.0` without a draw when the range is a point.
+fn draw(rng: &mut ChaCha8Rng, r: (f64, f64)) -> f64 {
+    if r.0 == r.1 {
+        r.0
+    } else {
+        rng.random_range(r.0..r.1)
+    }
+}
+
 /// An office of 5-7 x 5-7 m: the desk where the twins look, 5-9 things on it, 6-11 pieces of
 /// furniture around (most against the walls).
 fn seeded_office(rng: &mut ChaCha8Rng, sight: &[SightLine], people: bool) -> Layout {
@@ -311,28 +327,8 @@ fn seeded_office(rng: &mut ChaCha8Rng, sight: &[SightLine], people: bool) -> Lay
         for _ in 0..40 {
             let yaw = rng.random_range(-0.6..0.6);
             let (shape, z_half) = match rng.random_range(0..5) {
-                0 => {
-                    let h = [
-                        rng.random_range(0.06..0.16),
-                        rng.random_range(0.05..0.13),
-                        rng.random_range(0.04..0.18),
-                    ];
-                    (Shape::Cuboid { half: h }, h[2])
-                }
-                1 => {
-                    let h = [
-                        rng.random_range(0.08..0.15),
-                        rng.random_range(0.06..0.11),
-                        rng.random_range(0.01..0.03),
-                    ];
-                    (Shape::Cuboid { half: h }, h[2])
-                }
-                2 => {
-                    let h = [
-                        rng.random_range(0.18..0.3),
-                        0.02,
-                        rng.random_range(0.13..0.22),
-                    ];
+                k @ 0..=2 => {
+                    let h = DESK_BOXES[k].map(|r| draw(rng, r));
                     (Shape::Cuboid { half: h }, h[2])
                 }
                 3 => {
