@@ -1,25 +1,30 @@
 #!/usr/bin/env bash
 # Baseline (orb) ATE on a twin with every effect, with none, and with each effect alone:
-# one sweep folder per variant (n runs, --mapping-lag 3; each folder pins what it was rendered
-# without), then ablation.md / ablation.csv assembled from the folders' Table III.
-#   results/twins/ablation/ablation.sh [SEQ] [RUNS] [OUT]
+# one sweep folder per variant (n runs, --mapping-lag 3, the twin's first FRAMES frames; each
+# folder pins what it was rendered without), then SEQ.md / SEQ.csv assembled from the folders'
+# Table III.
+#   results/twins/ablation/ablation.sh [SEQ] [RUNS] [FRAMES] [OUT]
 # "none" is the twin with every listed effect off: a pinhole camera in the fixed office,
 # exact ground truth, noise-free images and depth; "only_X" adds X alone to "none".
 set -euo pipefail
 SEQ=${1:-twin_fr1_desk}
 RUNS=${2:-10}
-OUT=${3:-results/twins/ablation}
+FRAMES=${3:-300}
+OUT=${4:-results/twins/ablation}
 BIN=${NOISEFREE:-target/release/noisefree}
-ALL="lens blur rolling_shutter vignetting auto_exposure sensor_noise tremor depth_lag axial \
-quantisation lateral holes mocap_noise layout"
+# The effects to ablate (override with EFFECTS="..." for a twin that has fewer, e.g. EuRoC's).
+ALL=${EFFECTS:-"lens blur rolling_shutter vignetting auto_exposure sensor_noise tremor depth_lag \
+axial quantisation lateral holes mocap_noise layout"}
 mkdir -p "$OUT"
 
 sweep() { # name, comma-separated effects to switch off (may be empty)
   local dir="$OUT/$SEQ/$1"
-  local args=(--seq "$SEQ" --configs orb --runs "$RUNS" --mapping-lag 3 --jobs 1 --quiet --out "$dir")
+  local args=(--seq "$SEQ" --configs orb --runs "$RUNS" --frames "$FRAMES" --mapping-lag 3 --jobs 1 --quiet --out "$dir")
   [ -n "$2" ] && args+=(--synth-without "$2")
   "$BIN" sweep "${args[@]}" >/dev/null
-  "$BIN" table "$dir" >/dev/null
+  "$BIN" table "$dir" >/dev/null 2>&1
+  # runs.csv holds every figure of the table; the trajectories (MBs a variant) are not kept.
+  rm -rf "$dir/trajectories" "$dir/figures"
 }
 
 all_but() { # the effects except $1, plus the constant image noise unless $1 is sensor noise
@@ -50,7 +55,7 @@ done
   done
 } > "$OUT/$SEQ.csv.tmp" && mv "$OUT/$SEQ.csv.tmp" "$OUT/$SEQ.csv"
 {
-  echo "## Ablation on $SEQ: ORB-SLAM2 baseline, $RUNS runs per variant (--mapping-lag 3)"
+  echo "## Ablation on $SEQ (first $FRAMES frames): ORB-SLAM2 baseline, $RUNS runs per variant (--mapping-lag 3)"
   echo
   echo "| variant | effects on | ATE RMSE (m) |"
   echo "|---|---|---|"
