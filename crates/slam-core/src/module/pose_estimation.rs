@@ -607,6 +607,25 @@ mod tests {
         (Isometry3::translation(0.02, -0.01, 0.015) * twc(3)).inverse()
     }
 
+    /// `frame`'s pose optimized from [`start_pose`] with `hooks` and the default settings.
+    fn optimize_from_start(
+        frame: &mut TrackedFrame,
+        map: &Map,
+        camera: &Camera,
+        hooks: &NoiseHooks,
+    ) -> PoseOptCounts {
+        frame.tcw = Some(start_pose());
+        let levels = ScaleLevels::new(8, 1.2);
+        optimize_frame_pose(
+            frame,
+            map,
+            camera,
+            &levels,
+            &PoseOptConfig::default(),
+            hooks,
+        )
+    }
+
     fn error_m(tcw: &Isometry3<f64>) -> f64 {
         (tcw.inverse().translation.vector - twc(3).translation.vector).norm()
     }
@@ -615,22 +634,13 @@ mod tests {
     fn mcor_rejects_gross_depth_features_before_optimization() {
         let gross = [3, 17, 40, 77, 101];
         let (camera, map, mut frame, _) = scene(&gross);
-        frame.tcw = Some(start_pose());
         let params = McorParams::default();
         let hooks = NoiseHooks {
             mcor: Some(&params),
             avc: None,
             rc: None,
         };
-        let levels = ScaleLevels::new(8, 1.2);
-        let counts = optimize_frame_pose(
-            &mut frame,
-            &map,
-            &camera,
-            &levels,
-            &PoseOptConfig::default(),
-            &hooks,
-        );
+        let counts = optimize_from_start(&mut frame, &map, &camera, &hooks);
         assert_eq!(counts.n_matches, 120);
         assert_eq!(counts.n_mcor_rejected_clusters, 0);
         assert_eq!(counts.n_mcor_rejected_features, gross.len());
@@ -727,23 +737,14 @@ mod tests {
         // Five matches with depth 1.5 m too far. Far away that error moves the stereo
         // coordinate by less than ORB-SLAM2's gate, and the optimizer alone keeps such a match.
         let gross = [3, 17, 40, 77, 101];
-        let levels = ScaleLevels::new(8, 1.2);
         let run = |rc: Option<&RigidConsensusParams>| {
             let (camera, map, mut frame, _) = scene(&gross);
-            frame.tcw = Some(start_pose());
             let hooks = NoiseHooks {
                 mcor: None,
                 avc: None,
                 rc,
             };
-            let counts = optimize_frame_pose(
-                &mut frame,
-                &map,
-                &camera,
-                &levels,
-                &PoseOptConfig::default(),
-                &hooks,
-            );
+            let counts = optimize_from_start(&mut frame, &map, &camera, &hooks);
             (frame, counts)
         };
         let (plain, _) = run(None);
@@ -800,7 +801,6 @@ mod tests {
     #[test]
     fn avc_builds_four_dof_residuals_and_recovers_the_pose() {
         let (camera, map, mut frame, points) = scene(&[]);
-        frame.tcw = Some(start_pose());
         let avc = AvcParams::default();
         let hooks = NoiseHooks {
             mcor: None,
@@ -818,15 +818,7 @@ mod tests {
             &estimate,
         );
         assert_eq!(base.dof(), 3);
-        let levels = ScaleLevels::new(8, 1.2);
-        let counts = optimize_frame_pose(
-            &mut frame,
-            &map,
-            &camera,
-            &levels,
-            &PoseOptConfig::default(),
-            &hooks,
-        );
+        let counts = optimize_from_start(&mut frame, &map, &camera, &hooks);
         assert!(counts.n_inliers >= 115, "{counts:?}");
         assert!(error_m(&frame.tcw.unwrap()) < 0.005);
     }
