@@ -96,7 +96,7 @@ pub struct SweepArgs {
     /// Synthetic sequences: effects to switch off, comma-separated (an ablation): lens, blur,
     /// rolling_shutter, vignetting, auto_exposure, sensor_noise, image_noise, tremor, depth_lag,
     /// axial, quantisation, lateral, holes, misregistration, depth_distortion, mocap_noise,
-    /// layout.
+    /// layout, stamp_jitter, mocap_clock.
     #[arg(long = "synth-without", value_name = "EFFECTS", value_delimiter = ',')]
     pub synth_without: Vec<String>,
     /// Data root for real sequences [default: $NOISEFREE_DATA, else ./data].

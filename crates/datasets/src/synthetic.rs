@@ -64,13 +64,22 @@ fn geometry(
     }
 }
 
-/// The ground truth of frame `i`: the body pose for a rig (as written to disk), else the
-/// camera pose; with the configuration's motion-capture noise.
-fn truth(gen: &synth::Generator, rig: bool, i: usize) -> nalgebra::Isometry3<f64> {
+/// The ground truth of frames `0..n` as the writers put it on disk: for a rig the body pose
+/// at each frame's stamp (EuRoC's ground truth shares the camera's clock), else the
+/// generator's motion-capture record of the camera ([`synth::Generator::groundtruth`]: at the
+/// frame instants, or on the motion-capture clock); with the configuration's motion-capture
+/// noise.
+fn groundtruth(gen: &synth::Generator, rig: bool, n: usize) -> ate_eval::Trajectory {
     if rig {
-        synth::euroc::groundtruth_body(gen, i)
+        ate_eval::Trajectory {
+            stamps: (0..n).map(|i| gen.timestamp(i)).collect(),
+            poses: (0..n)
+                .map(|i| synth::euroc::groundtruth_body(gen, i))
+                .collect(),
+        }
     } else {
-        gen.measured_pose(&gen.pose(i), i)
+        let (stamps, poses) = gen.groundtruth(n).into_iter().unzip();
+        ate_eval::Trajectory { stamps, poses }
     }
 }
 
@@ -84,28 +93,36 @@ fn input(f: synth::SynthFrame, rect: Option<&StereoRectification>) -> FrameInput
     input
 }
 
+/// Colour frame `i` with the depth image of frame `j` (the pair the reader's association makes,
+/// [`synth::Generator::stream_pairs`]; `j == i` but where a free-running depth stream's jitter
+/// pairs the next one).
+fn paired(mut colour: FrameInput, depth: &FrameInput) -> FrameInput {
+    colour.depth = depth.depth.clone();
+    colour
+}
+
 /// The first `n_frames` frames of `gen` with exact ground truth (T_world_camera, TUM
 /// convention). RGB-D presets give [`Format::TumRgbd`], stereo presets [`Format::EurocStereo`]
 /// without `t_bs` (their ground truth is already the camera pose); a calibrated rig is
-/// rectified and has body ground truth with `t_bs` (see the module documentation).
+/// rectified and has body ground truth with `t_bs` (see the module documentation). An RGB-D
+/// sequence holds the colour-depth pairs the TUM reader would associate in the written folder
+/// ([`synth::Generator::stream_pairs`]), so a frame can lack or borrow a depth image as there.
 pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
     let rect = rectification(gen);
     let (camera, t_bs) = geometry(gen, rect.as_ref());
     let rig = rect.is_some();
-    let rendered: Vec<synth::SynthFrame> = (0..n_frames)
+    let rendered: Vec<FrameInput> = (0..n_frames)
         .into_par_iter()
-        .map(|i| gen.frame(i))
+        .map(|i| input(gen.frame(i), rect.as_ref()))
         .collect();
-    let mut stamps = Vec::with_capacity(n_frames);
-    let mut poses = Vec::with_capacity(n_frames);
-    let frames = rendered
-        .into_iter()
-        .map(|f| {
-            stamps.push(f.timestamp);
-            poses.push(truth(gen, rig, f.index));
-            input(f, rect.as_ref())
-        })
-        .collect();
+    let frames = if camera.sensor == SensorKind::Rgbd {
+        gen.stream_pairs(n_frames)
+            .into_iter()
+            .map(|(i, j)| paired(rendered[i].clone(), &rendered[j]))
+            .collect()
+    } else {
+        rendered
+    };
     let format = match camera.sensor {
         SensorKind::Rgbd => Format::TumRgbd,
         SensorKind::Stereo => Format::EurocStereo,
@@ -114,7 +131,7 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
         name: format!("synthetic-seed{}", gen.seed()),
         camera,
         frames,
-        groundtruth: Some(ate_eval::Trajectory { stamps, poses }),
+        groundtruth: Some(groundtruth(gen, rig, n_frames)),
         t_bs,
         format,
         notes: Vec::new(),
@@ -122,13 +139,12 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
 }
 
 /// The first `n_frames` frames of `gen` as an opened sequence: ground truth now, frames rendered
-/// when the reader reads them (the same frames, bit for bit, as [`from_synth`]).
+/// when the reader reads them (the same frames, bit for bit, as [`from_synth`]; a frame that
+/// borrows the next frame's depth renders that frame too).
 pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::FrameReader) {
     let rect = rectification(gen);
     let (camera, t_bs) = geometry(gen, rect.as_ref());
     let rig = rect.is_some();
-    let stamps = (0..n_frames).map(|i| gen.timestamp(i)).collect();
-    let poses = (0..n_frames).map(|i| truth(gen, rig, i)).collect();
     let format = match camera.sensor {
         SensorKind::Rgbd => Format::TumRgbd,
         SensorKind::Stereo => Format::EurocStereo,
@@ -137,15 +153,26 @@ pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::
         name: format!("synthetic-seed{}", gen.seed()),
         camera,
         frames: Vec::new(),
-        groundtruth: Some(ate_eval::Trajectory { stamps, poses }),
+        groundtruth: Some(groundtruth(gen, rig, n_frames)),
         t_bs,
         format,
         notes: Vec::new(),
     };
+    let pairs = match seq.camera.sensor {
+        SensorKind::Rgbd => gen.stream_pairs(n_frames),
+        SensorKind::Stereo => (0..n_frames).map(|i| (i, i)).collect(),
+    };
     let gen = gen.clone();
     let rect = rect.map(Arc::new);
-    let frames =
-        crate::FrameReader::new(n_frames, move |i| Ok(input(gen.frame(i), rect.as_deref())));
+    let frames = crate::FrameReader::new(pairs.len(), move |k| {
+        let (i, j) = pairs[k];
+        let colour = input(gen.frame(i), rect.as_deref());
+        Ok(if j == i {
+            colour
+        } else {
+            paired(colour, &input(gen.frame(j), rect.as_deref()))
+        })
+    });
     (seq, frames)
 }
 

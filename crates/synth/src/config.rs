@@ -361,6 +361,13 @@ pub struct SynthConfig {
     /// Motion-capture noise on the ground truth the writers put on disk (and the in-memory
     /// sequence's ground truth); the rendering always uses the exact poses. Off by default.
     pub mocap_noise: Option<MocapNoise>,
+    /// How the images are stamped (RGB-D only): each stream at its own capture instant with the
+    /// host's arrival jitter, as TUM's recordings are. Off by default: every image carries the
+    /// exact colour capture instant.
+    pub stamps: Option<StreamStamps>,
+    /// The motion-capture system's own clock (RGB-D only): ground truth sampled at its rate and
+    /// phase, not at the frame instants. Off by default: one exact-time pose per frame.
+    pub mocap_clock: Option<MocapClock>,
     /// The room and its furniture (default: the office with its fixed furniture).
     pub scene: SceneSpec,
 }
@@ -422,6 +429,35 @@ pub struct MocapNoise {
     pub angle_rad: f64,
 }
 
+/// How a recording stamps its images, as a host stamps TUM's Kinect streams on arrival: the
+/// colour image at its capture instant plus a white arrival jitter drawn per frame, the depth
+/// image either with the colour's stamp (hardware-synchronised streams: fr3's Xtion) or at its
+/// own capture instant (a [`DepthLag`] earlier) with its own jitter (free-running streams: fr1
+/// and fr2's Kinects) ([`crate::Generator::timestamp`], [`crate::Generator::depth_timestamp`]).
+/// The images are not touched: the jitter is an error of the stamps, which evaluation against
+/// the ground truth and the readers' colour-depth association see. Without it every image
+/// carries the exact colour capture instant (a depth lag then lies about its time, as an
+/// unsynchronised sensor does).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreamStamps {
+    /// Standard deviation of a colour stamp's error from its capture instant, seconds (drawn
+    /// Gaussian, clipped at 4 sigma so that stamps stay in order).
+    pub rgb_jitter_s: f64,
+    /// The same for a depth stamp of a free-running depth stream, seconds; `None`: the depth
+    /// image is stamped with its colour image's stamp.
+    pub depth_jitter_s: Option<f64>,
+}
+
+/// The motion-capture system's own clock: the ground truth is sampled every `1 / rate_hz`
+/// seconds from a phase drawn from the seed, stamped to 0.1 ms as TUM's files are, and not at
+/// the frame instants ([`crate::Generator::groundtruth`]); evaluation then pairs each frame with
+/// the nearest sample, without interpolation, as evaluate_ate.py and evo do on real files.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MocapClock {
+    /// Sampling rate, Hz (TUM's MotionAnalysis system: 100).
+    pub rate_hz: f64,
+}
+
 impl Default for SynthConfig {
     fn default() -> Self {
         SynthConfig {
@@ -435,6 +471,8 @@ impl Default for SynthConfig {
             occlusion: None,
             rig: None,
             mocap_noise: None,
+            stamps: None,
+            mocap_clock: None,
             scene: SceneSpec::default(),
         }
     }
@@ -639,7 +677,7 @@ impl fmt::Display for Preset {
 
 /// The effects a configuration can be stripped of one at a time ([`SynthConfig::without`]),
 /// with what each removes: the names of an ablation.
-pub const EFFECTS: [(&str, &str); 17] = [
+pub const EFFECTS: [(&str, &str); 19] = [
     (
         "lens",
         "lens distortion written into the images (the camera becomes a pinhole)",
@@ -683,6 +721,14 @@ pub const EFFECTS: [(&str, &str); 17] = [
     (
         "layout",
         "furniture and clutter drawn from the seed (back to the room's fixed layout)",
+    ),
+    (
+        "stamp_jitter",
+        "each stream stamped at its own capture instant with arrival jitter (back to exact colour stamps)",
+    ),
+    (
+        "mocap_clock",
+        "ground truth on the motion-capture system's own clock (back to exact poses at the frame instants)",
     ),
 ];
 
@@ -728,6 +774,8 @@ impl SynthConfig {
             "depth_distortion" => d.distortion = None,
             "mocap_noise" => self.mocap_noise = None,
             "layout" => self.scene.seeded_layout = false,
+            "stamp_jitter" => self.stamps = None,
+            "mocap_clock" => self.mocap_clock = None,
             _ => {
                 return Err(SynthError::UnknownName {
                     what: "effect",
@@ -821,6 +869,25 @@ impl SynthConfig {
         if let Some(m) = &self.mocap_noise {
             if !(m.position_m >= 0.0 && m.angle_rad >= 0.0) {
                 return bad("motion-capture noise needs position_m >= 0 and angle_rad >= 0");
+            }
+        }
+        if let Some(s) = &self.stamps {
+            if !self.is_rgbd() {
+                return bad("stream stamps are for RGB-D sequences (EuRoC's stamps are hardware-synchronised)");
+            }
+            // Clipped at 4 sigma: consecutive stamps stay at least a fifth of a period apart.
+            let max = 0.1 / c.fps;
+            let depth = s.depth_jitter_s.unwrap_or(0.0);
+            if !((0.0..=max).contains(&s.rgb_jitter_s) && (0.0..=max).contains(&depth)) {
+                return bad("stamp jitter must be within 0..a tenth of the frame period");
+            }
+        }
+        if let Some(m) = &self.mocap_clock {
+            if !self.is_rgbd() {
+                return bad("a motion-capture clock is for RGB-D sequences (EuRoC's ground truth shares the camera's clock)");
+            }
+            if !(m.rate_hz >= 1.0 && m.rate_hz <= 10_000.0) {
+                return bad("motion-capture rate must be within 1..10000 Hz");
             }
         }
         if let Some(m) = &self.moving_objects {

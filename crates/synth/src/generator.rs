@@ -23,6 +23,19 @@ use crate::SynthError;
 /// Time stamp of frame 0 in nanoseconds since the epoch (an arbitrary date in 2014, like EuRoC's).
 pub const T0_NS: u64 = 1_403_636_580_000_000_000;
 
+/// `ns` rounded to the nearest multiple of `unit` nanoseconds (a stamp's resolution).
+fn round_to(ns: i128, unit: i128) -> u64 {
+    ((ns + unit / 2).div_euclid(unit) * unit) as u64
+}
+
+/// Nanoseconds since the epoch as seconds, exact to the microsecond.
+fn seconds(ns: u64) -> f64 {
+    (ns / 1000) as f64 * 1e-6 + (ns % 1000) as f64 * 1e-9
+}
+
+/// The association window of TUM's associate.py, seconds.
+pub const ASSOCIATE_MAX_DIFFERENCE_S: f64 = 0.02;
+
 /// One generated frame.
 #[derive(Clone, Debug)]
 pub struct SynthFrame {
@@ -159,27 +172,134 @@ impl Generator {
         &self.scene
     }
 
-    /// Stamp of frame `index` in nanoseconds since the epoch. RGB-D stamps are whole
-    /// microseconds (TUM files carry 6 decimals).
-    pub fn stamp_ns(&self, index: usize) -> u64 {
+    /// Capture instant of frame `index` (its colour image) in nanoseconds since the epoch.
+    /// RGB-D instants are whole microseconds (TUM files carry 6 decimals).
+    fn capture_ns(&self, index: usize) -> u64 {
         let dt = (index as f64 * 1e9 / self.config.camera.fps).round() as u64;
         let ns = T0_NS + dt;
         if self.config.is_rgbd() {
-            (ns + 500) / 1000 * 1000
+            round_to(ns as i128, 1000)
         } else {
             ns
         }
     }
 
-    /// Stamp of frame `index` in seconds since the epoch.
-    pub fn timestamp(&self, index: usize) -> f64 {
-        let ns = self.stamp_ns(index);
-        (ns / 1000) as f64 * 1e-6 + (ns % 1000) as f64 * 1e-9
+    /// The arrival jitter of stream `item` (0 colour, 1 depth) of frame `index`, nanoseconds:
+    /// Gaussian with standard deviation `sd_s`, clipped at 4 sigma.
+    fn jitter_ns(&self, index: usize, item: u64, sd_s: f64) -> i128 {
+        let z = NoiseKey::new(self.seed, index, Stream::Stamps).normal(item);
+        (z.clamp(-4.0, 4.0) * sd_s * 1e9).round() as i128
     }
 
-    /// Seconds since frame 0.
+    /// Stamp of frame `index` (its colour image) in nanoseconds since the epoch: its capture
+    /// instant, plus the arrival jitter with [`crate::config::StreamStamps`]. RGB-D stamps are
+    /// whole microseconds.
+    pub fn stamp_ns(&self, index: usize) -> u64 {
+        let ns = self.capture_ns(index);
+        match &self.config.stamps {
+            Some(s) => round_to(ns as i128 + self.jitter_ns(index, 0, s.rgb_jitter_s), 1000),
+            None => ns,
+        }
+    }
+
+    /// Stamp of frame `index` in seconds since the epoch.
+    pub fn timestamp(&self, index: usize) -> f64 {
+        seconds(self.stamp_ns(index))
+    }
+
+    /// Stamp of frame `index`'s depth image in nanoseconds since the epoch: with
+    /// [`crate::config::StreamStamps`] of a free-running depth stream its own capture instant
+    /// (a [`crate::DepthLag`] earlier than the colour's) plus its own arrival jitter, whole
+    /// microseconds; otherwise the colour stamp.
+    pub fn depth_stamp_ns(&self, index: usize) -> u64 {
+        let Some(sd) = self.config.stamps.and_then(|s| s.depth_jitter_s) else {
+            return self.stamp_ns(index);
+        };
+        let lag_frames = self
+            .config
+            .depth_noise
+            .lag
+            .as_ref()
+            .map_or(0.0, |l| l.frames);
+        let lag_ns = (lag_frames / self.config.camera.fps * 1e9).round() as i128;
+        round_to(
+            self.capture_ns(index) as i128 - lag_ns + self.jitter_ns(index, 1, sd),
+            1000,
+        )
+    }
+
+    /// Stamp of frame `index`'s depth image in seconds since the epoch.
+    pub fn depth_timestamp(&self, index: usize) -> f64 {
+        seconds(self.depth_stamp_ns(index))
+    }
+
+    /// Which depth image goes with which colour image among frames `0..n`, as (colour frame,
+    /// depth frame) sorted by colour frame: the pairs TUM's associate.py finds in the written
+    /// `rgb.txt` and `depth.txt` (stamps closer than 20 ms, nearest first, each once). With a
+    /// free-running depth stream ([`crate::config::StreamStamps::depth_jitter_s`]) a colour
+    /// image whose jitter brings the next depth image nearer than its own gets that one, and
+    /// a colour image left without depth drops out, as on real fr1 / fr2 recordings;
+    /// otherwise every frame is paired with its own depth.
+    pub fn stream_pairs(&self, n: usize) -> Vec<(usize, usize)> {
+        if self.config.stamps.and_then(|s| s.depth_jitter_s).is_none() {
+            return (0..n).map(|i| (i, i)).collect();
+        }
+        // The stamps as the files carry them (6 decimals) and a reader parses them.
+        let read = |s: f64| crate::tum::stamp_name(s).parse::<f64>().unwrap_or(s);
+        let rgb: Vec<f64> = (0..n).map(|i| read(self.timestamp(i))).collect();
+        let depth: Vec<f64> = (0..n).map(|i| read(self.depth_timestamp(i))).collect();
+        ate_eval::associate(
+            &rgb,
+            &depth,
+            ASSOCIATE_MAX_DIFFERENCE_S,
+            0.0,
+            ate_eval::AssociationMode::Tum,
+        )
+    }
+
+    /// Seconds since frame 0 of frame `index`'s capture instant (what is rendered).
     pub fn time(&self, index: usize) -> f64 {
-        (self.stamp_ns(index) - T0_NS) as f64 * 1e-9
+        (self.capture_ns(index) - T0_NS) as f64 * 1e-9
+    }
+
+    /// The ground truth of frames `0..n` as the motion-capture system records it: (stamp in
+    /// seconds since the epoch, camera-to-world pose with the motion-capture noise). Without a
+    /// [`crate::config::MocapClock`], one pose per frame at its capture instant; with one, a
+    /// pose every `1 / rate_hz` from a phase drawn from the seed, stamps rounded to 0.1 ms,
+    /// from the last sample at or before frame 0's capture instant to the first at or after
+    /// frame `n - 1`'s, so every frame has a sample within half a period (the noise drawn per
+    /// sample).
+    pub fn groundtruth(&self, n: usize) -> Vec<(f64, Isometry3<f64>)> {
+        let Some(clock) = &self.config.mocap_clock else {
+            return (0..n)
+                .map(|i| {
+                    let t = seconds(self.capture_ns(i));
+                    (t, self.measured_pose(&self.pose(i), i))
+                })
+                .collect();
+        };
+        if n == 0 {
+            return Vec::new();
+        }
+        const STAMP_NS: i128 = 100_000; // 0.1 ms, the resolution of TUM's ground-truth files
+        let period = 1e9 / clock.rate_hz;
+        let key = NoiseKey::new(self.seed, 0, Stream::Stamps);
+        let phase = key.uniform(2) * period;
+        let (first, last) = (self.capture_ns(0) as f64, self.capture_ns(n - 1) as f64);
+        let k0 = ((first - T0_NS as f64 - phase) / period).floor() as i64;
+        let k1 = ((last - T0_NS as f64 - phase) / period).ceil() as i64;
+        (k0..=k1)
+            .enumerate()
+            .map(|(sample, k)| {
+                let instant = T0_NS as f64 + phase + k as f64 * period;
+                let ns = round_to(instant.round() as i128, STAMP_NS);
+                let t = (ns as i128 - T0_NS as i128) as f64 * 1e-9;
+                (
+                    seconds(ns),
+                    self.measured_pose(&self.pose_at_time(t), sample),
+                )
+            })
+            .collect()
     }
 
     /// Exact camera-to-world pose at `t` seconds since frame 0.

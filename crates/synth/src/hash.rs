@@ -23,6 +23,9 @@ pub enum Stream {
     Range = 6,
     /// Motion-capture noise of the written ground truth (index: the pose component).
     Mocap = 7,
+    /// Stamp jitter of the colour and depth streams and the motion-capture clock's phase
+    /// (index: 0 colour, 1 depth, 2 phase).
+    Stamps = 8,
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mixer with good avalanche.

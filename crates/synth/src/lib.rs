@@ -45,8 +45,8 @@ use std::path::PathBuf;
 
 pub use config::{
     preset_names, AxialNoise, DepthLag, DepthNoise, DisparityQuantisation, Holes, ImageConfig,
-    LateralNoise, Misregistration, MocapNoise, MovingObjects, Preset, StereoRig, Supersampling,
-    SynthConfig, SystematicDistortion, Trajectory, EFFECTS,
+    LateralNoise, Misregistration, MocapClock, MocapNoise, MovingObjects, Preset, StereoRig,
+    StreamStamps, Supersampling, SynthConfig, SystematicDistortion, Trajectory, EFFECTS,
 };
 pub use contact::{contact_sheet, write_contact_sheet};
 pub use euroc::write_euroc;

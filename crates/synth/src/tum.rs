@@ -1,7 +1,9 @@
 //! Writes a generated RGB-D sequence in exactly the TUM RGB-D layout: `rgb/<stamp>.png`
-//! (8-bit RGB), `depth/<stamp>.png` (16-bit, 5000 units per metre, 0 = no depth), `rgb.txt`,
-//! `depth.txt`, `groundtruth.txt` (`timestamp tx ty tz qx qy qz qw`) and `associations.txt`
-//! (`t_rgb rgb/x.png t_depth depth/x.png`, as TUM's associate.py writes it).
+//! (8-bit RGB), `depth/<stamp>.png` (16-bit, 5000 units per metre, 0 = no depth), each image
+//! named by its own stream's stamp, `rgb.txt`, `depth.txt`, `groundtruth.txt` (`timestamp tx
+//! ty tz qx qy qz qw`, [`Generator::groundtruth`]: with the motion-capture noise and clock the
+//! configuration has) and `associations.txt` (`t_rgb rgb/x.png t_depth depth/y.png`, the pairs
+//! TUM's associate.py finds in the two lists: [`Generator::stream_pairs`]).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -69,6 +71,7 @@ fn write_into(
         .try_for_each(|i| -> Result<(), SynthError> {
             let f = gen.frame(i);
             let name = format!("{}.png", stamp_name(f.timestamp));
+            let depth_name = format!("{}.png", stamp_name(gen.depth_timestamp(i)));
             let (w, h) = (f.gray.width, f.gray.height);
             if let Some(rgb) = &f.rgb {
                 png(&rgb_dir.join(&name), rgb, w, h, ExtendedColorType::Rgb8)?;
@@ -81,7 +84,13 @@ fn write_into(
                         ((z as f64 * DEPTH_FACTOR).round().clamp(0.0, 65535.0) as u16).to_ne_bytes()
                     })
                     .collect();
-                png(&depth_dir.join(&name), &bytes, w, h, ExtendedColorType::L16)?;
+                png(
+                    &depth_dir.join(&depth_name),
+                    &bytes,
+                    w,
+                    h,
+                    ExtendedColorType::L16,
+                )?;
             }
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             Ok(())
@@ -96,13 +105,20 @@ fn write_into(
     let mut gt =
         format!("# ground truth trajectory\n# file: '{what}'\n# timestamp tx ty tz qx qy qz qw\n");
     let mut assoc = String::new();
+    // Infallible: writing into a String.
     for i in 0..n {
         let s = stamp_name(gen.timestamp(i));
-        // Infallible: writing into a String.
+        let d = stamp_name(gen.depth_timestamp(i));
         let _ = writeln!(rgb_txt, "{s} rgb/{s}.png");
-        let _ = writeln!(depth_txt, "{s} depth/{s}.png");
-        let _ = writeln!(assoc, "{s} rgb/{s}.png {s} depth/{s}.png");
-        let _ = writeln!(gt, "{}", pose_line(gen.timestamp(i), &gen.pose(i)));
+        let _ = writeln!(depth_txt, "{d} depth/{d}.png");
+    }
+    for (i, j) in gen.stream_pairs(n) {
+        let s = stamp_name(gen.timestamp(i));
+        let d = stamp_name(gen.depth_timestamp(j));
+        let _ = writeln!(assoc, "{s} rgb/{s}.png {d} depth/{d}.png");
+    }
+    for (t, pose) in gen.groundtruth(n) {
+        let _ = writeln!(gt, "{}", pose_line(t, &pose));
     }
     text(&root.join("rgb.txt"), &rgb_txt)?;
     text(&root.join("depth.txt"), &depth_txt)?;

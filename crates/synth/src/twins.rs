@@ -25,8 +25,8 @@ use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vect
 use slam_core::{Distortion, SensorKind};
 
 use crate::config::{
-    DepthLag, DepthNoise, ImageConfig, MocapNoise, MovingObjects, Room, SceneSpec, StereoRig,
-    SynthConfig, Trajectory,
+    DepthLag, DepthNoise, ImageConfig, MocapClock, MocapNoise, MovingObjects, Room, SceneSpec,
+    StereoRig, StreamStamps, SynthConfig, Trajectory,
 };
 use crate::handheld::{HandHeldPath, MotionSpec, Orbit, Region, Tremor};
 use crate::imaging::{AutoExposure, Exposure, Imaging, RollingShutter, SensorNoise, Vignetting};
@@ -328,6 +328,41 @@ pub const TUM_MOCAP: MocapNoise = MocapNoise {
     position_m: 0.0002,
     angle_rad: 0.02 * std::f64::consts::PI / 180.0,
 };
+
+/// How TUM's host stamps the camera's two 30 Hz streams. Colour: measured on real fr2_desk,
+/// whose ORB-SLAM2 estimate in ../shared/data carries the colour stamps of the 2893 frames it
+/// tracked; their 2820 intervals without a dropped frame (72 gaps over 50 ms) have a mean of
+/// 33.37 ms and a standard deviation of 2.2 ms (most at 31-32 and 35-36 ms), what stamps each
+/// off its capture instant by white noise of 2.2 / sqrt(2) = 1.56 ms give; we put 1.5 ms.
+/// Depth: fr1 and fr2's Kinects run the two streams free (fr1_xyz's first pairs, as its
+/// published associations show them, put depth 14.9 ms before, 15.5 ms after and 12.4 ms before
+/// colour), stamped on arrival like colour: the same jitter assumed, at the depth's own
+/// instant (the twins' [`DepthLag`]). fr3's Xtion synchronises them (fr3_long_office's first
+/// pairs: 2-23 microseconds apart): the depth gets the colour's stamp. Not modelled: the
+/// dropped frames (2.5 % of fr2_desk's), the host clock's 0.1 % drift from 30 Hz, a constant
+/// latency, the drift of fr1/fr2's depth phase against colour.
+pub fn tum_stamps(camera: TumCamera) -> StreamStamps {
+    StreamStamps {
+        rgb_jitter_s: 0.0015,
+        depth_jitter_s: (camera != TumCamera::Fr3).then_some(0.0015),
+    }
+}
+
+/// TUM's motion-capture clock, free-running against the camera's, so that a frame's nearest
+/// ground-truth pose is up to half a period away and evaluate_ate.py pairs them without
+/// interpolating: 100 Hz as the TUM paper (Sturm et al., IROS 2012) gives it and fr1_xyz's
+/// (3000 poses in 30.09 s) and fr3_long_office's (8710 poses at 10 ms) files carry it; the real
+/// fr2_desk `groundtruth.txt` in ../shared/data is denser, 20 957 poses mostly 3.2-3.4 ms
+/// apart (300 Hz, with 100 gaps of 20 ms or more that are not modelled).
+pub fn tum_mocap_clock(camera: TumCamera) -> MocapClock {
+    MocapClock {
+        rate_hz: if camera == TumCamera::Fr2 {
+            300.0
+        } else {
+            100.0
+        },
+    }
+}
 
 /// The Vicon system of EuRoC's Vicon rooms: the EuRoC paper gives about 1 mm for its
 /// positions. Orientation: markers about 0.3 m apart, each at about 1 mm, averaged over four or
@@ -686,6 +721,9 @@ fn euroc_config(t: &TwinSpec) -> SynthConfig {
         occlusion: None,
         rig: Some(rig),
         mocap_noise: t.mocap,
+        // EuRoC's camera and ground truth share the VI-sensor's hardware-synchronised clock.
+        stamps: None,
+        mocap_clock: None,
         scene: scene(t),
     }
 }
@@ -695,10 +733,20 @@ pub fn config(t: &TwinSpec) -> SynthConfig {
     if t.camera == TwinCamera::Euroc {
         return euroc_config(t);
     }
+    let TwinCamera::Tum(tum) = t.camera else {
+        unreachable!("the EuRoC twins returned above")
+    };
+    // TUM's clocks for the twins without people; the people twins keep exact stamps, ground
+    // truth at the frame instants and the depth lag below (the bytes their Table III was
+    // measured on), though fr3's real streams are synchronised.
+    let clocked = t.people.is_none();
     let mut depth_noise = DepthNoise::kinect();
-    // Colour and depth come from two free-running 30 Hz streams; TUM pairs them within 20 ms.
-    // Depth taken a third of a frame (11 ms) before the colour image.
-    depth_noise.lag = Some(DepthLag { frames: 1.0 / 3.0 });
+    // fr1 and fr2's Kinects run colour and depth as two free-running 30 Hz streams, which TUM
+    // pairs within 20 ms: depth taken a third of a frame (11 ms) before the colour image.
+    // fr3's Xtion synchronises them ([`tum_stamps`]).
+    if !(clocked && tum == TumCamera::Fr3) {
+        depth_noise.lag = Some(DepthLag { frames: 1.0 / 3.0 });
+    }
     let camera = t.camera.camera();
     let mut imaging = kinect_imaging();
     set_blur_samples(&mut imaging, &camera, t);
@@ -717,6 +765,8 @@ pub fn config(t: &TwinSpec) -> SynthConfig {
         occlusion: None,
         rig: None,
         mocap_noise: t.mocap,
+        stamps: clocked.then(|| tum_stamps(tum)),
+        mocap_clock: clocked.then(|| tum_mocap_clock(tum)),
         scene: scene(t),
     }
 }
@@ -933,6 +983,47 @@ mod tests {
         for t in &TWINS {
             assert_eq!(t.mocap.is_none(), t.people.is_some(), "{}", t.name);
         }
+    }
+
+    #[test]
+    fn tum_twins_without_people_have_tums_clocks() {
+        for t in &TWINS {
+            let c = config(t);
+            match t.camera {
+                TwinCamera::Euroc => {
+                    assert_eq!((c.stamps, c.mocap_clock), (None, None), "{}", t.name)
+                }
+                TwinCamera::Tum(cam) if t.people.is_none() => {
+                    let (s, m) = (c.stamps.unwrap(), c.mocap_clock.unwrap());
+                    assert_eq!(s.rgb_jitter_s, 0.0015, "{}", t.name);
+                    // fr3's Xtion: synchronised streams, depth at the colour's instant and
+                    // stamp; fr1 / fr2: a free-running depth stream, 11 ms early, own stamps.
+                    let lag = c.depth_noise.lag.as_ref().map(|l| l.frames);
+                    if cam == TumCamera::Fr3 {
+                        assert_eq!((s.depth_jitter_s, lag), (None, None), "{}", t.name);
+                    } else {
+                        assert_eq!(s.depth_jitter_s, Some(0.0015), "{}", t.name);
+                        assert_eq!(lag, Some(1.0 / 3.0), "{}", t.name);
+                    }
+                    let hz = if cam == TumCamera::Fr2 { 300.0 } else { 100.0 };
+                    assert_eq!(m.rate_hz, hz, "{}", t.name);
+                    c.validate().unwrap();
+                }
+                // The people twins: exact stamps and ground truth, their old depth lag.
+                TwinCamera::Tum(_) => {
+                    assert_eq!((c.stamps, c.mocap_clock), (None, None), "{}", t.name);
+                    assert!(c.depth_noise.lag.is_some(), "{}", t.name);
+                }
+            }
+        }
+        // The colour stamps' interval spread is the one measured on real fr2_desk (2.2 ms).
+        let gen = crate::Generator::new(config(twin("twin_fr2_desk").unwrap()), 0);
+        let dt: Vec<f64> = (1..2980)
+            .map(|i| (gen.stamp_ns(i) - gen.stamp_ns(i - 1)) as f64 * 1e-9)
+            .collect();
+        let m = dt.iter().sum::<f64>() / dt.len() as f64;
+        let sd = (dt.iter().map(|d| (d - m).powi(2)).sum::<f64>() / dt.len() as f64).sqrt();
+        assert!((0.0020..0.0023).contains(&sd), "{sd}");
     }
 
     #[test]

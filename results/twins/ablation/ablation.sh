@@ -14,7 +14,7 @@ OUT=${4:-results/twins/ablation}
 BIN=${NOISEFREE:-target/release/noisefree}
 # The effects to ablate (override with EFFECTS="..." for a twin that has fewer, e.g. EuRoC's).
 ALL=${EFFECTS:-"lens blur rolling_shutter vignetting auto_exposure sensor_noise tremor depth_lag \
-axial quantisation lateral holes mocap_noise layout"}
+axial quantisation lateral holes mocap_noise layout stamp_jitter mocap_clock"}
 mkdir -p "$OUT"
 
 sweep() { # name, comma-separated effects to switch off (may be empty)
