@@ -222,3 +222,58 @@ fn free_running_depth_pairs_as_the_reader_associates_them() {
         );
     }
 }
+
+/// An fr2 twin's depth files hold what fr2's Kinect records (5208 units per metre, ORB-SLAM2's
+/// TUM2.yaml factor): a folder named as an fr2 sequence reads back with fr2's camera and that
+/// factor to exactly the in-memory depth.
+#[test]
+fn fr2_twin_depth_reads_back_with_orbslam2s_factor() {
+    let mut c = SynthConfig::preset("twin_fr2_desk").unwrap();
+    // The imaging effects cost time and do not touch depth.
+    for e in [
+        "blur",
+        "rolling_shutter",
+        "auto_exposure",
+        "vignetting",
+        "image_noise",
+    ] {
+        c.without(e).unwrap();
+    }
+    assert_eq!(c.depth_units_per_metre, 5208.0);
+    let gen = Generator::new(c, 3);
+    let n = 2;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("rgbd_dataset_freiburg2_twin");
+    synth::write_tum(&gen, n, &dir, |_| {}).unwrap();
+    let seq = load_tum(&dir, None).unwrap();
+    let mem = from_synth(&gen, n);
+    assert_eq!(seq.camera, gen.camera());
+    assert_eq!(seq.len(), mem.frames.len());
+    for (a, b) in seq.frames.iter().zip(&mem.frames) {
+        assert_eq!(a.image, b.image);
+        assert_eq!(a.depth, b.depth);
+    }
+    // Read with TUM's nominal 5000, the depth is 4 % long, as real fr2 files are.
+    let nominal = datasets::load_tum_with(
+        &dir,
+        &datasets::TumOptions {
+            depth_factor: Some(5000.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let (a, b) = (
+        nominal.frames[0].depth.as_ref().unwrap(),
+        mem.frames[0].depth.as_ref().unwrap(),
+    );
+    let (za, zb) = a
+        .data
+        .iter()
+        .zip(&b.data)
+        .find(|(&x, &y)| x > 0.0 && y > 0.0)
+        .unwrap();
+    assert!(
+        ((za / zb) as f64 - 5208.0 / 5000.0).abs() < 1e-4,
+        "{za} {zb}"
+    );
+}

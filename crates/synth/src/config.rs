@@ -348,6 +348,11 @@ pub struct SynthConfig {
     pub imaging: Imaging,
     /// Depth-sensor model (ignored for stereo).
     pub depth_noise: DepthNoise,
+    /// Units per metre of the 16-bit depth the sensor records (RGB-D): the measured depth is
+    /// rounded to them in memory, as the TUM writer stores it (default 5000, TUM's; the fr2
+    /// twins 5208, the factor ORB-SLAM2's TUM2.yaml reads real fr2 files with, whose Kinect
+    /// records depth 4 % long).
+    pub depth_units_per_metre: f64,
     /// Moving objects, off by default.
     pub moving_objects: Option<MovingObjects>,
     /// Frames `[start, start + n)` fully covered by a flat featureless surface 0.5 m in front of
@@ -467,6 +472,7 @@ impl Default for SynthConfig {
             image: ImageConfig::default(),
             imaging: Imaging::default(),
             depth_noise: DepthNoise::default(),
+            depth_units_per_metre: crate::noise::DEPTH_FACTOR,
             moving_objects: None,
             occlusion: None,
             rig: None,
@@ -870,6 +876,9 @@ impl SynthConfig {
             if !(m.position_m >= 0.0 && m.angle_rad >= 0.0) {
                 return bad("motion-capture noise needs position_m >= 0 and angle_rad >= 0");
             }
+        }
+        if !(1000.0..=10_000.0).contains(&self.depth_units_per_metre) {
+            return bad("depth units per metre must be within 1000..10000");
         }
         if let Some(s) = &self.stamps {
             if !self.is_rgbd() {

@@ -592,6 +592,7 @@ impl Generator {
                     .render(None);
                     sensor_depth(
                         model,
+                        self.config.depth_units_per_metre,
                         cam,
                         &lagged.depth,
                         &lagged.cos_incidence,
@@ -601,6 +602,7 @@ impl Generator {
                 }
                 _ => sensor_depth(
                     model,
+                    self.config.depth_units_per_metre,
                     cam,
                     &left.depth,
                     &left.cos_incidence,

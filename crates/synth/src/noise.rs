@@ -26,14 +26,15 @@ fn iround(x: f64) -> i64 {
     }
 }
 
-/// Rounds metres to the TUM PNG resolution; 0 stays 0 (invalid), out-of-range becomes 0.
+/// Rounds metres to the resolution of a 16-bit depth PNG of `units` per metre; 0 stays 0
+/// (invalid), out-of-range becomes 0.
 #[inline]
-pub fn quantise_png(z: f64) -> f32 {
-    let q = iround(z * DEPTH_FACTOR) as f64;
+pub fn quantise_png(z: f64, units: f64) -> f32 {
+    let q = iround(z * units) as f64;
     if !(1.0..=65535.0).contains(&q) {
         return 0.0;
     }
-    (q / DEPTH_FACTOR) as f32
+    (q / units) as f32
 }
 
 /// Rounds to the nearest grey level and clamps to 0..=255 (cheaper than `f64::round`).
@@ -43,9 +44,11 @@ fn grey_level(v: f64) -> u8 {
 }
 
 /// Applies the sensor model to a true depth image (`depth`, `cos_incidence` of the pixel-centre
-/// rays, row-major `width x height`) and returns the measured depth in metres (0 = hole).
+/// rays, row-major `width x height`) and returns the measured depth in metres (0 = hole), on
+/// the grid of a 16-bit PNG of `units` per metre.
 pub fn sensor_depth(
     model: &DepthNoise,
+    units: f64,
     camera: &Camera,
     depth: &[f32],
     cos_incidence: &[f32],
@@ -130,7 +133,7 @@ pub fn sensor_depth(
                 let dq = (iround(disparity * q.subpixel) as f64).max(1.0) / q.subpixel;
                 z = q.bf / dq;
             }
-            quantise_png(z)
+            quantise_png(z, units)
         })
         .collect()
 }
@@ -268,7 +271,7 @@ mod tests {
         };
         for z in [1.0f32, 2.0, 3.0] {
             let (cam, d, c) = flat(z);
-            let out = sensor_depth(&model, &cam, &d, &c, 11, 4);
+            let out = sensor_depth(&model, DEPTH_FACTOR, &cam, &d, &c, 11, 4);
             let n = out.len() as f64;
             let mean = out.iter().map(|&x| x as f64).sum::<f64>() / n;
             let var = out.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / n;
@@ -295,7 +298,7 @@ mod tests {
         let d: Vec<f32> = (0..c.len())
             .map(|i| 2.9 + 0.2 * (i as f32 / c.len() as f32))
             .collect();
-        let out = sensor_depth(&model, &cam, &d, &c, 1, 0);
+        let out = sensor_depth(&model, DEPTH_FACTOR, &cam, &d, &c, 1, 0);
         let mut levels: Vec<u32> = out.iter().map(|&z| (z * 5000.0).round() as u32).collect();
         levels.dedup();
         levels.sort();
@@ -321,7 +324,7 @@ mod tests {
         d[0] = 0.3;
         d[1] = 5.1;
         c[2] = 80f32.to_radians().cos();
-        let out = sensor_depth(&model, &cam, &d, &c, 1, 0);
+        let out = sensor_depth(&model, DEPTH_FACTOR, &cam, &d, &c, 1, 0);
         assert_eq!(&out[..4], &[0.0, 0.0, 0.0, 2.0]);
         assert!(out[3..].iter().all(|&z| z == 2.0));
     }
@@ -333,7 +336,7 @@ mod tests {
             ..DepthNoise::default()
         };
         let (cam, d, c) = flat(1.5);
-        let out = sensor_depth(&model, &cam, &d, &c, 1, 0);
+        let out = sensor_depth(&model, DEPTH_FACTOR, &cam, &d, &c, 1, 0);
         assert!(out.iter().all(|&z| z == 1.5));
     }
 

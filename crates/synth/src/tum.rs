@@ -1,5 +1,6 @@
 //! Writes a generated RGB-D sequence in exactly the TUM RGB-D layout: `rgb/<stamp>.png`
-//! (8-bit RGB), `depth/<stamp>.png` (16-bit, 5000 units per metre, 0 = no depth), each image
+//! (8-bit RGB), `depth/<stamp>.png` (16-bit, the configuration's units per metre, 5000 but for
+//! the fr2 twins' 5208, 0 = no depth), each image
 //! named by its own stream's stamp, `rgb.txt`, `depth.txt`, `groundtruth.txt` (`timestamp tx
 //! ty tz qx qy qz qw`, [`Generator::groundtruth`]: with the motion-capture noise and clock the
 //! configuration has) and `associations.txt` (`t_rgb rgb/x.png t_depth depth/y.png`, the pairs
@@ -14,7 +15,6 @@ use nalgebra::Isometry3;
 use rayon::prelude::*;
 
 use crate::generator::Generator;
-use crate::noise::DEPTH_FACTOR;
 use crate::write::{mkdir, png, text, Staging};
 use crate::SynthError;
 
@@ -66,6 +66,7 @@ fn write_into(
     mkdir(&rgb_dir)?;
     mkdir(&depth_dir)?;
     let done = AtomicUsize::new(0);
+    let units = gen.config().depth_units_per_metre;
     (0..n)
         .into_par_iter()
         .try_for_each(|i| -> Result<(), SynthError> {
@@ -81,7 +82,7 @@ fn write_into(
                     .data
                     .iter()
                     .flat_map(|&z| {
-                        ((z as f64 * DEPTH_FACTOR).round().clamp(0.0, 65535.0) as u16).to_ne_bytes()
+                        ((z as f64 * units).round().clamp(0.0, 65535.0) as u16).to_ne_bytes()
                     })
                     .collect();
                 png(

@@ -348,6 +348,12 @@ pub fn tum_stamps(camera: TumCamera) -> StreamStamps {
     }
 }
 
+/// Units per metre of fr2's depth files as ORB-SLAM2 reads them (TUM2.yaml's DepthMapFactor
+/// 5208; TUM documents 5000 for every camera): fr2's Kinect records depth about 4 % long, and
+/// the fr2 twins write what it would record, so ORB-SLAM2's factor reads the true depth and
+/// TUM's nominal one is 4 % off, as on the real files.
+pub const FR2_DEPTH_UNITS_PER_METRE: f64 = 5208.0;
+
 /// TUM's motion-capture clock, free-running against the camera's, so that a frame's nearest
 /// ground-truth pose is up to half a period away and evaluate_ate.py pairs them without
 /// interpolating: 100 Hz as the TUM paper (Sturm et al., IROS 2012) gives it and fr1_xyz's
@@ -717,6 +723,7 @@ fn euroc_config(t: &TwinSpec) -> SynthConfig {
         image: ImageConfig::default(),
         imaging,
         depth_noise: DepthNoise::default(),
+        depth_units_per_metre: crate::noise::DEPTH_FACTOR,
         moving_objects: None,
         occlusion: None,
         rig: Some(rig),
@@ -757,6 +764,11 @@ pub fn config(t: &TwinSpec) -> SynthConfig {
         image: ImageConfig::default(),
         imaging,
         depth_noise,
+        depth_units_per_metre: if tum == TumCamera::Fr2 {
+            FR2_DEPTH_UNITS_PER_METRE
+        } else {
+            crate::noise::DEPTH_FACTOR
+        },
         moving_objects: t.people.map(|activity| MovingObjects {
             count: 2,
             speed: 1.0,
@@ -989,6 +1001,13 @@ mod tests {
     fn tum_twins_without_people_have_tums_clocks() {
         for t in &TWINS {
             let c = config(t);
+            // fr2's depth files in ORB-SLAM2's units, everyone else's in TUM's.
+            let units = if t.camera == TwinCamera::Tum(TumCamera::Fr2) {
+                5208.0
+            } else {
+                5000.0
+            };
+            assert_eq!(c.depth_units_per_metre, units, "{}", t.name);
             match t.camera {
                 TwinCamera::Euroc => {
                     assert_eq!((c.stamps, c.mocap_clock), (None, None), "{}", t.name)

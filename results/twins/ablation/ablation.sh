@@ -6,6 +6,9 @@
 #   results/twins/ablation/ablation.sh [SEQ] [RUNS] [FRAMES] [OUT]
 # "none" is the twin with every listed effect off: a pinhole camera in the fixed office,
 # exact ground truth, noise-free images and depth; "only_X" adds X alone to "none".
+# RERUN="all only_X ..." sweeps just those variants afresh (their folders replaced) and keeps
+# the other variants' folders as they are (for an effect added later: the other variants'
+# configurations do not change), then assembles the table from every folder.
 set -euo pipefail
 SEQ=${1:-twin_fr1_desk}
 RUNS=${2:-10}
@@ -19,6 +22,12 @@ mkdir -p "$OUT"
 
 sweep() { # name, comma-separated effects to switch off (may be empty)
   local dir="$OUT/$SEQ/$1"
+  if [ -n "${RERUN:-}" ]; then
+    case " $RERUN " in
+      *" $1 "*) rm -rf "$dir" ;;
+      *) return 0 ;;
+    esac
+  fi
   local args=(--seq "$SEQ" --configs orb --runs "$RUNS" --frames "$FRAMES" --mapping-lag 3 --jobs 1 --quiet --out "$dir")
   [ -n "$2" ] && args+=(--synth-without "$2")
   "$BIN" sweep "${args[@]}" >/dev/null
