@@ -186,8 +186,11 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
             .flat_map(|g| g.2.iter().copied())
             .filter(|a| *a > 0.0 && a.is_finite())
     };
-    let ymax = positive().fold(1e-4f64, f64::max) * 1.5;
-    let ymin = positive().fold(ymax, f64::min).min(ymax / 10.0) / 1.5;
+    let top = positive().fold(1e-4f64, f64::max) * 1.5;
+    let ymin = positive().fold(top, f64::min).min(top / 10.0) / 1.5;
+    // The top 28 % of the log axis is left to the legend (upper left), so no run hides under it.
+    const LEGEND: f64 = 0.28;
+    let ymax = ((top.ln() - LEGEND * ymin.ln()) / (1.0 - LEGEND)).exp();
     let ncfg = cfgs.len().max(1) as f64;
     both!(stem, |root| {
         let mut chart = ChartBuilder::on(root)
