@@ -104,9 +104,10 @@ fn paired(mut colour: FrameInput, depth: &FrameInput) -> FrameInput {
 /// The first `n_frames` frames of `gen` with exact ground truth (T_world_camera, TUM
 /// convention). RGB-D presets give [`Format::TumRgbd`], stereo presets [`Format::EurocStereo`]
 /// without `t_bs` (their ground truth is already the camera pose); a calibrated rig is
-/// rectified and has body ground truth with `t_bs` (see the module documentation). An RGB-D
+/// rectified and has body ground truth with `t_bs` (see the module documentation). The
 /// sequence holds the colour-depth pairs the TUM reader would associate in the written folder
-/// ([`synth::Generator::stream_pairs`]), so a frame can lack or borrow a depth image as there.
+/// ([`synth::Generator::stream_pairs`]; every frame with its own images but where a free-running
+/// depth stream's jitter makes a frame borrow a depth image or drop out).
 pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
     let rect = rectification(gen);
     let (camera, t_bs) = geometry(gen, rect.as_ref());
@@ -115,14 +116,11 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
         .into_par_iter()
         .map(|i| input(gen.frame(i), rect.as_ref()))
         .collect();
-    let frames = if camera.sensor == SensorKind::Rgbd {
-        gen.stream_pairs(n_frames)
-            .into_iter()
-            .map(|(i, j)| paired(rendered[i].clone(), &rendered[j]))
-            .collect()
-    } else {
-        rendered
-    };
+    let frames = gen
+        .stream_pairs(n_frames)
+        .into_iter()
+        .map(|(i, j)| paired(rendered[i].clone(), &rendered[j]))
+        .collect();
     let format = match camera.sensor {
         SensorKind::Rgbd => Format::TumRgbd,
         SensorKind::Stereo => Format::EurocStereo,
@@ -158,10 +156,7 @@ pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::
         format,
         notes: Vec::new(),
     };
-    let pairs = match seq.camera.sensor {
-        SensorKind::Rgbd => gen.stream_pairs(n_frames),
-        SensorKind::Stereo => (0..n_frames).map(|i| (i, i)).collect(),
-    };
+    let pairs = gen.stream_pairs(n_frames);
     let gen = gen.clone();
     let rect = rect.map(Arc::new);
     let frames = crate::FrameReader::new(pairs.len(), move |k| {

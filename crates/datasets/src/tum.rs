@@ -138,31 +138,8 @@ pub fn read_associations(path: &Path) -> Result<Vec<(ListEntry, ListEntry)>, Dat
 /// |a - b| < `max_difference` is a candidate, candidates are taken greedily by increasing |dt|
 /// (ties by index), each stamp at most once. Returns index pairs sorted by the first list.
 pub fn associate(a: &[f64], b: &[f64], max_difference: f64) -> Vec<(usize, usize)> {
-    let mut cand: Vec<(f64, usize, usize)> = Vec::new();
-    for (i, &ta) in a.iter().enumerate() {
-        let start = b.partition_point(|&tb| tb <= ta - max_difference);
-        for (j, &tb) in b.iter().enumerate().skip(start) {
-            if tb >= ta + max_difference {
-                break;
-            }
-            let dt = (ta - tb).abs();
-            if dt < max_difference {
-                cand.push((dt, i, j));
-            }
-        }
-    }
-    cand.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
-    let (mut used_a, mut used_b) = (vec![false; a.len()], vec![false; b.len()]);
-    let mut pairs = Vec::new();
-    for (_, i, j) in cand {
-        if !used_a[i] && !used_b[j] {
-            used_a[i] = true;
-            used_b[j] = true;
-            pairs.push((i, j));
-        }
-    }
-    pairs.sort_unstable();
-    pairs
+    // evaluate_ate.py's association is associate.py's: the same greedy pairing.
+    ate_eval::associate(a, b, max_difference, 0.0, ate_eval::AssociationMode::Tum)
 }
 
 /// Loads a TUM RGB-D folder with the paper's defaults; `camera` overrides the camera detected

@@ -285,14 +285,16 @@ impl Generator {
         let period = 1e9 / clock.rate_hz;
         let key = NoiseKey::new(self.seed, 0, Stream::Stamps);
         let phase = key.uniform(2) * period;
-        let (first, last) = (self.capture_ns(0) as f64, self.capture_ns(n - 1) as f64);
-        let k0 = ((first - T0_NS as f64 - phase) / period).floor() as i64;
-        let k1 = ((last - T0_NS as f64 - phase) / period).ceil() as i64;
+        // Instants in nanoseconds since T0, small enough for f64 to hold them exactly to the
+        // nanosecond (the epoch's 1.4e18 would not).
+        let since_t0 = |i: usize| (self.capture_ns(i) - T0_NS) as f64;
+        let k0 = ((since_t0(0) - phase) / period).floor() as i64;
+        let k1 = ((since_t0(n - 1) - phase) / period).ceil() as i64;
         (k0..=k1)
             .enumerate()
             .map(|(sample, k)| {
-                let instant = T0_NS as f64 + phase + k as f64 * period;
-                let ns = round_to(instant.round() as i128, STAMP_NS);
+                let instant = T0_NS as i128 + (phase + k as f64 * period).round() as i128;
+                let ns = round_to(instant, STAMP_NS);
                 let t = (ns as i128 - T0_NS as i128) as f64 * 1e-9;
                 (
                     seconds(ns),
