@@ -48,6 +48,9 @@ enum Command {
     /// The regression suite: short synthetic sequences x the four configurations against the
     /// golden figures (tests/golden/regression.toml); `--update` rewrites them.
     Regress(commands::regress::RegressArgs),
+    /// A sequence's camera as an ORB-SLAM2 / ORB-SLAM3 settings file (YAML), for running
+    /// another system on the same files.
+    Settings(commands::settings::SettingsArgs),
     /// Vocabularies of ORB words for place recognition: train, convert (ORBvoc.txt <-> binary), info.
     Vocab(commands::vocab::VocabArgs),
 }
@@ -66,6 +69,7 @@ fn main() -> ExitCode {
         Command::Features(a) => commands::features::run(a),
         Command::Regress(a) => commands::regress::run(a),
         Command::Vocab(a) => commands::vocab::run(a),
+        Command::Settings(a) => commands::settings::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

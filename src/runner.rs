@@ -328,6 +328,7 @@ mod tests {
             frames: Some(frames),
             synth_seed: 1,
             synth_without: Vec::new(),
+            camera: None,
         }
     }
 

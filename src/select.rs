@@ -52,6 +52,9 @@ pub struct LoadOptions {
     pub synth_seed: u64,
     /// Effects switched off in a synthetic sequence (`synth::EFFECTS` names).
     pub synth_without: Vec<String>,
+    /// A folder's camera from an ORB-SLAM2 / ORB-SLAM3 settings file instead of its name or
+    /// `sensor.yaml` files (`run --camera`).
+    pub camera: Option<PathBuf>,
 }
 
 /// Loads (or generates) the sequence of `source`, every frame decoded.
@@ -72,12 +75,21 @@ pub fn open(
     opts: &LoadOptions,
 ) -> Result<(Sequence, FrameReader)> {
     let (seq, mut frames) = match source {
-        Source::Path(p) => {
-            datasets::open_path(p).with_context(|| format!("loading {}", p.display()))?
+        Source::Path(p) => match &opts.camera {
+            None => datasets::open_path(p),
+            Some(c) => datasets::open_path_with_settings(p, c),
         }
+        .with_context(|| format!("loading {}", p.display()))?,
         Source::Catalog(name) => {
             let entry = catalog.get(name)?;
             if let Some(preset) = &entry.preset {
+                if let Some(c) = &opts.camera {
+                    bail!(
+                        "--camera {}: {name} is synthetic and has its own camera; --camera is for \
+                         folders (--path, or a downloaded real sequence)",
+                        c.display()
+                    );
+                }
                 let preset = synth::Preset::from_name(preset)?;
                 let mut config = preset.config();
                 for effect in &opts.synth_without {
@@ -103,8 +115,11 @@ pub fn open(
                         dir.display()
                     );
                 }
-                let (mut s, frames) = datasets::open_path(&dir)
-                    .with_context(|| format!("loading {}", dir.display()))?;
+                let (mut s, frames) = match &opts.camera {
+                    None => datasets::open_path(&dir),
+                    Some(c) => datasets::open_path_with_settings(&dir, c),
+                }
+                .with_context(|| format!("loading {}", dir.display()))?;
                 s.name = entry.name.clone();
                 (s, frames)
             }

@@ -7,6 +7,7 @@ pub mod fetch;
 pub mod plot;
 pub mod regress;
 pub mod run;
+pub mod settings;
 pub mod sweep;
 pub mod synth;
 pub mod table;

@@ -24,6 +24,11 @@ pub struct RunArgs {
     /// Any TUM RGB-D or EuRoC ASL folder.
     #[arg(long, value_name = "DIR")]
     pub path: Option<PathBuf>,
+    /// The folder's camera from an ORB-SLAM2 or ORB-SLAM3 settings file (YAML: intrinsics,
+    /// distortion, bf, ThDepth, DepthMapFactor, a stereo pair's rectification) instead of the
+    /// one its name (TUM) or sensor.yaml files (EuRoC) imply; `noisefree settings` writes one.
+    #[arg(long, value_name = "FILE.yaml", requires = "path")]
+    pub camera: Option<PathBuf>,
     /// TOML configuration overlaid on the sensor's defaults (any subset of the fields).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
@@ -171,6 +176,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         frames: args.frames,
         synth_seed: args.synth_seed,
         synth_without: args.synth_without.clone(),
+        camera: args.camera.clone(),
     };
     if !args.quiet {
         eprintln!("loading {label} ...");

@@ -325,6 +325,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
         frames: args.frames,
         synth_seed: args.synth_seed,
         synth_without: args.synth_without.clone(),
+        camera: None,
     };
     let started = Instant::now();
     let finished = std::sync::atomic::AtomicUsize::new(0);

@@ -25,6 +25,10 @@ pub struct EurocOptions {
     pub th_depth: Option<f64>,
     /// Read at most this many frames; `None`: all.
     pub max_frames: Option<usize>,
+    /// A camera settings file (ORB-SLAM2 / ORB-SLAM3, see [`crate::settings`]) and what it
+    /// says: its rectified camera and its rectification replace those computed from the
+    /// `sensor.yaml` files (which still place cam0 in the body frame for the ground truth).
+    pub settings: Option<(std::path::PathBuf, crate::settings::CameraSettings)>,
 }
 
 /// One row of a camera's `data.csv`: timestamp (ns), file name, line number.
@@ -264,12 +268,22 @@ pub fn open_euroc_with(
     };
     let left = read_sensor_yaml(&mav0.join("cam0/sensor.yaml"))?;
     let right = read_sensor_yaml(&mav0.join("cam1/sensor.yaml"))?;
-    let rect = StereoRectification::new(&left, &right).map_err(|e| match e {
-        DatasetError::Invalid { msg, .. } => {
-            DatasetError::invalid(mav0.join("cam1/sensor.yaml"), msg)
-        }
-        other => other,
-    })?;
+    let rect = match &opts.settings {
+        None => StereoRectification::new(&left, &right).map_err(|e| match e {
+            DatasetError::Invalid { msg, .. } => {
+                DatasetError::invalid(mav0.join("cam1/sensor.yaml"), msg)
+            }
+            other => other,
+        })?,
+        Some((path, s)) => match s.rectification(path, left.t_bs)? {
+            Some(r) => r,
+            // A file without a rectification takes the images as rectified already.
+            None => crate::settings::CameraSettings::of_camera(&s.camera, None, None)
+                .rectification(path, left.t_bs)?
+                .ok_or_else(|| DatasetError::invalid(path, "no stereo camera"))?,
+        },
+    };
+    let rect = Arc::new(rect);
     let rows0 = read_camera_csv(&mav0.join("cam0/data.csv"))?;
     let rows1 = read_camera_csv(&mav0.join("cam1/data.csv"))?;
     let t0: Vec<f64> = rows0.iter().map(|r| ns_to_s(r.stamp_ns)).collect();
@@ -286,8 +300,12 @@ pub fn open_euroc_with(
     }
     let (w, h) = (left.width as usize, left.height as usize);
     let th_depth = opts.th_depth.unwrap_or(EUROC_TH_DEPTH);
-    let (camera, t_bs) = (rect.camera(th_depth), rect.t_b_left);
+    let (camera, t_bs) = match &opts.settings {
+        None => (rect.camera(th_depth), rect.t_b_left),
+        Some((_, s)) => (s.camera.clone(), rect.t_b_left),
+    };
     let data = mav0.clone();
+    let rectification = rect.clone();
     let frames = FrameReader::new(pairs.len(), move |k| {
         let (i, j) = pairs[k];
         let lp = data.join("cam0/data").join(&rows0[i].file);
@@ -322,6 +340,8 @@ pub fn open_euroc_with(
         t_bs: Some(t_bs),
         format: Format::EurocStereo,
         notes,
+        depth_factor: None,
+        rectification: Some(rectification),
     };
     Ok((seq, frames))
 }

@@ -20,6 +20,7 @@ pub mod euroc;
 pub mod fetch;
 pub mod rectify;
 pub mod sequence;
+pub mod settings;
 pub mod synthetic;
 pub mod tum;
 
@@ -42,6 +43,47 @@ pub fn detect_format(dir: &Path) -> Option<Format> {
         Some(Format::TumRgbd)
     } else {
         None
+    }
+}
+
+/// Opens any TUM RGB-D or EuRoC folder with the camera of an ORB-SLAM2 / ORB-SLAM3 settings
+/// file (`noisefree run --camera`) instead of the one its name or `sensor.yaml` files imply:
+/// intrinsics, distortion, `bf`, `ThDepth`, the depth factor (TUM) and the rectification
+/// (EuRoC). The folder's layout decides the sensor.
+pub fn open_path_with_settings(
+    dir: &Path,
+    settings: &Path,
+) -> Result<(Sequence, FrameReader), DatasetError> {
+    if !dir.is_dir() {
+        return Err(DatasetError::Missing {
+            path: dir.to_path_buf(),
+            what: "a TUM RGB-D or EuRoC sequence folder".into(),
+        });
+    }
+    match detect_format(dir) {
+        Some(Format::EurocStereo) => {
+            let s = settings::read_settings(settings, slam_core::SensorKind::Stereo)?;
+            open_euroc_with(
+                dir,
+                &EurocOptions {
+                    th_depth: Some(s.camera.th_depth),
+                    settings: Some((settings.to_path_buf(), s)),
+                    ..EurocOptions::default()
+                },
+            )
+        }
+        Some(Format::TumRgbd) => {
+            let s = settings::read_settings(settings, slam_core::SensorKind::Rgbd)?;
+            open_tum_with(
+                dir,
+                &TumOptions {
+                    camera: Some(s.camera),
+                    depth_factor: s.depth_factor,
+                    ..TumOptions::default()
+                },
+            )
+        }
+        None => open_path(dir),
     }
 }
 

@@ -287,6 +287,69 @@ impl StereoRectification {
         Ok(rect)
     }
 
+    /// A rectification given rather than computed: the rotations, shared intrinsics and
+    /// baseline a settings file carries (ORB-SLAM2's `LEFT.R` / `LEFT.P`...), as ORB-SLAM2's
+    /// stereo examples take them. `left.t_bs` places the raw left camera in the body frame
+    /// (identity when unknown). Fails when the two cameras differ in size.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_parts(
+        left: &RawCamera,
+        right: &RawCamera,
+        r_left: Rotation3<f64>,
+        r_right: Rotation3<f64>,
+        focal: f64,
+        principal_point: Vector2<f64>,
+        baseline: f64,
+    ) -> Result<Self, DatasetError> {
+        if (left.width, left.height) != (right.width, right.height) {
+            return Err(DatasetError::invalid(
+                "settings",
+                format!(
+                    "left and right cameras differ in size ({}x{} vs {}x{})",
+                    left.width, left.height, right.width, right.height
+                ),
+            ));
+        }
+        let t_b_left = left.t_bs
+            * Isometry3::from_parts(
+                Translation3::identity(),
+                UnitQuaternion::from_rotation_matrix(&r_left.inverse()),
+            );
+        let empty = || RemapMap {
+            width: 0,
+            height: 0,
+            map_x: vec![],
+            map_y: vec![],
+        };
+        let mut rect = StereoRectification {
+            r_left,
+            r_right,
+            focal,
+            principal_point,
+            baseline,
+            width: left.width,
+            height: left.height,
+            t_b_left,
+            left: left.clone(),
+            right: right.clone(),
+            map_left: empty(),
+            map_right: empty(),
+        };
+        rect.map_left = rect.build_map(false);
+        rect.map_right = rect.build_map(true);
+        Ok(rect)
+    }
+
+    /// The raw left camera the rectification was made for.
+    pub fn left_raw(&self) -> &RawCamera {
+        &self.left
+    }
+
+    /// The raw right camera the rectification was made for.
+    pub fn right_raw(&self) -> &RawCamera {
+        &self.right
+    }
+
     fn build_map(&self, right: bool) -> RemapMap {
         let (w, h) = (self.width as usize, self.height as usize);
         let mut map_x = Vec::with_capacity(w * h);

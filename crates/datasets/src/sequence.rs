@@ -48,6 +48,12 @@ pub struct Sequence {
     /// What was repaired while reading the sequence's files (e.g. a ground truth with
     /// repeated stamps, read as evaluate_ate.py reads it), one line each, for the user to see.
     pub notes: Vec<String>,
+    /// RGB-D: the depth PNG value per metre the depth images were read with (a settings
+    /// file's `DepthMapFactor`).
+    pub depth_factor: Option<f64>,
+    /// Stereo with raw images: the rectification applied to them (a settings file's
+    /// `LEFT.*` / `RIGHT.*`); `None` when the images come rectified.
+    pub rectification: Option<Arc<crate::rectify::StereoRectification>>,
 }
 
 impl Sequence {

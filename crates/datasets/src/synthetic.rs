@@ -83,6 +83,13 @@ fn groundtruth(gen: &synth::Generator, rig: bool, n: usize) -> ate_eval::Traject
     }
 }
 
+/// RGB-D: the depth units the generator writes (`synth::write_tum`) and the reader reads.
+fn depth_factor(gen: &synth::Generator) -> Option<f64> {
+    gen.config()
+        .is_rgbd()
+        .then(|| gen.config().depth_units_per_metre)
+}
+
 /// Frame `f` as the system gets it: rectified when there is a rig.
 fn input(f: synth::SynthFrame, rect: Option<&StereoRectification>) -> FrameInput {
     let mut input = f.into_input();
@@ -133,6 +140,8 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
         t_bs,
         format,
         notes: Vec::new(),
+        depth_factor: depth_factor(gen),
+        rectification: rect.map(Arc::new),
     }
 }
 
@@ -147,7 +156,7 @@ pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::
         SensorKind::Rgbd => Format::TumRgbd,
         SensorKind::Stereo => Format::EurocStereo,
     };
-    let seq = Sequence {
+    let mut seq = Sequence {
         name: format!("synthetic-seed{}", gen.seed()),
         camera,
         frames: Vec::new(),
@@ -155,10 +164,13 @@ pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::
         t_bs,
         format,
         notes: Vec::new(),
+        depth_factor: depth_factor(gen),
+        rectification: None,
     };
     let pairs = gen.stream_pairs(n_frames);
     let gen = gen.clone();
     let rect = rect.map(Arc::new);
+    seq.rectification = rect.clone();
     let frames = crate::FrameReader::new(pairs.len(), move |k| {
         let (i, j) = pairs[k];
         let colour = input(gen.frame(i), rect.as_deref());

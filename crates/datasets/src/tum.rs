@@ -221,6 +221,12 @@ pub fn open_tum_with(
         ));
     }
 
+    // A settings file without the image size (ORB-SLAM2's TUM files have none): the images say.
+    let mut camera = camera;
+    if camera.width == 0 || camera.height == 0 {
+        let first = read_gray(&dir.join(&pairs[0].0.file))?;
+        (camera.width, camera.height) = (first.width as u32, first.height as u32);
+    }
     let (w, h) = (camera.width as usize, camera.height as usize);
     let folder = dir.to_path_buf();
     let n_pairs = pairs.len();
@@ -266,6 +272,8 @@ pub fn open_tum_with(
         t_bs: None,
         format: Format::TumRgbd,
         notes,
+        depth_factor: Some(depth_factor),
+        rectification: None,
     };
     Ok((seq, frames))
 }
