@@ -58,6 +58,8 @@ pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
     let mut over = read_toml(path)?;
     if let toml::Value::Table(t) = &mut over {
         t.remove("vocabulary");
+        // External systems' definitions (`crate::external::system`), not the SLAM's settings.
+        t.remove("systems");
     }
     let mut value = toml::Value::try_from(base).context("serialising the default configuration")?;
     merge(&mut value, over.clone());

@@ -5,6 +5,7 @@
 mod analysis;
 mod commands;
 mod config_file;
+mod external;
 mod figures;
 mod regress;
 mod runner;

@@ -158,16 +158,19 @@ pub fn table3(
     catalog: &Catalog,
     paper: bool,
     settings: &FolderSettings,
+    labels: &BTreeMap<String, String>,
 ) -> Rendered {
     let mapping_lag = settings.mapping_lag;
     let kinds: Vec<ConfigKind> = ConfigKind::EVERY
         .into_iter()
         .filter(|k| records.iter().any(|r| r.config == k.name()))
         .collect();
+    let systems = external_columns(records, labels);
     let mut header = vec!["sequence".to_string(), "class".to_string()];
     for k in &kinds {
         header.push(format!("{} (ours)", column_name(*k)));
     }
+    header.extend(systems.iter().map(|(_, label)| label.clone()));
     if paper {
         for k in &kinds {
             header.push(format!("{} (paper)", column_name(*k)));
@@ -197,6 +200,17 @@ pub fn table3(
             let runs: Vec<&RunRecord> = records
                 .iter()
                 .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
+                .collect();
+            row.push(if runs.is_empty() {
+                "-".into()
+            } else {
+                Cell::of(&runs).text()
+            });
+        }
+        for (name, _) in &systems {
+            let runs: Vec<&RunRecord> = records
+                .iter()
+                .filter(|r| r.sequence == seq && &r.config == name)
                 .collect();
             row.push(if runs.is_empty() {
                 "-".into()
@@ -282,6 +296,10 @@ pub fn table3(
             ""
         },
     );
+    let notes = match external_notes(records, &systems) {
+        n if n.is_empty() => notes,
+        n => format!("{notes} {n}"),
+    };
     let notes = if settings.synth_without.is_empty() {
         notes
     } else {
@@ -302,6 +320,57 @@ fn varied_realizations(records: &[RunRecord]) -> bool {
             Some(prev) => prev != r.synth_seed,
             None => false,
         })
+}
+
+/// The external systems with runs in `records` (names not of noisefree's configurations), each
+/// with its column heading (`labels`, from the folder's systems.toml, else its name).
+pub fn external_columns(
+    records: &[RunRecord],
+    labels: &BTreeMap<String, String>,
+) -> Vec<(String, String)> {
+    let mut names: Vec<&str> = records
+        .iter()
+        .map(|r| r.config.as_str())
+        .filter(|c| ConfigKind::parse(c).is_err())
+        .collect();
+    names.sort();
+    names.dedup();
+    names
+        .into_iter()
+        .map(|n| {
+            (
+                n.to_string(),
+                labels.get(n).cloned().unwrap_or_else(|| n.to_string()),
+            )
+        })
+        .collect()
+}
+
+/// What the external systems' columns are and why their failed runs failed.
+fn external_notes(records: &[RunRecord], systems: &[(String, String)]) -> String {
+    let mut out = Vec::new();
+    for (name, label) in systems {
+        let mut text = format!(
+            "{label}: the external system `{name}` run by the harness on the same files (its threads' own run-to-run spread; keyframes and map points not reported)"
+        );
+        let mut reasons: BTreeMap<(&str, &str), usize> = BTreeMap::new();
+        for r in records.iter().filter(|r| &r.config == name && r.failed) {
+            let why = r
+                .reason
+                .as_deref()
+                .unwrap_or("fewer than 80 % of the frames tracked");
+            *reasons.entry((r.sequence.as_str(), why)).or_default() += 1;
+        }
+        if !reasons.is_empty() {
+            let list: Vec<String> = reasons
+                .iter()
+                .map(|((seq, why), n)| format!("{seq}: {n} x {why}"))
+                .collect();
+            text += &format!("; failed runs: {}", list.join("; "));
+        }
+        out.push(text + ".");
+    }
+    out.join(" ")
 }
 
 fn column_name(k: ConfigKind) -> &'static str {
@@ -368,13 +437,19 @@ pub fn table1(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {
 }
 
 /// Table IV: mean frames per second per sequence and configuration (one thread).
-pub fn table4(records: &[RunRecord], catalog: &Catalog) -> Rendered {
+pub fn table4(
+    records: &[RunRecord],
+    catalog: &Catalog,
+    labels: &BTreeMap<String, String>,
+) -> Rendered {
     let kinds: Vec<ConfigKind> = ConfigKind::EVERY
         .into_iter()
         .filter(|k| records.iter().any(|r| r.config == k.name()))
         .collect();
+    let systems = external_columns(records, labels);
     let mut header = vec!["sequence".to_string(), "frames".to_string()];
     header.extend(kinds.iter().map(|k| column_name(*k).to_string()));
+    header.extend(systems.iter().map(|(_, l)| l.clone()));
     let mut rows = Vec::new();
     for seq in sequence_order(records, catalog) {
         let frames = records
@@ -394,12 +469,49 @@ pub fn table4(records: &[RunRecord], catalog: &Catalog) -> Rendered {
                 format!("{:.1}", Cell::of(&runs).fps)
             });
         }
+        for (name, _) in &systems {
+            let runs: Vec<&RunRecord> = records
+                .iter()
+                .filter(|r| r.sequence == seq && &r.config == name && !r.failed)
+                .collect();
+            row.push(if runs.is_empty() {
+                "-".into()
+            } else {
+                let n = runs.len() as f64;
+                let fps = runs.iter().map(|r| r.fps).sum::<f64>() / n;
+                let cpu: Vec<f64> = runs
+                    .iter()
+                    .filter_map(|r| Some(r.cpu_s? / r.wall_s))
+                    .collect();
+                let mem: Vec<f64> = runs.iter().filter_map(|r| r.peak_rss_mb).collect();
+                let mut t = format!("{fps:.1}");
+                if !cpu.is_empty() {
+                    t += &format!(
+                        " ({:.1} cores, {:.0} MB)",
+                        cpu.iter().sum::<f64>() / cpu.len() as f64,
+                        mem.iter().cloned().fold(0.0, f64::max)
+                    );
+                }
+                t
+            });
+        }
         rows.push(row);
     }
+    let notes = if systems.is_empty() {
+        "Wall-clock frames per second of one run on one core, averaged over the runs; runs of a sweep \
+         share the machine's cores, so compare columns within one sweep."
+            .to_string()
+    } else {
+        "Wall-clock frames per second of one run, averaged over the runs; ours on one core. An \
+         external system's figure is its whole process from start to exit (loading its vocabulary, \
+         and any real-time pacing of its example program, included), with the cores it kept busy \
+         on average (CPU time / wall time) and its peak resident memory; runs of a sweep share \
+         the machine's cores, so compare columns within one sweep."
+            .to_string()
+    };
     render(
         "Table IV: frames per second (single thread, whole pipeline)",
-        "Wall-clock frames per second of one run on one core, averaged over the runs; runs of a sweep \
-         share the machine's cores, so compare columns within one sweep.",
+        &notes,
         &header,
         &rows,
     )
@@ -540,14 +652,17 @@ mod tests {
             failed: false,
             frames: 700,
             tracked: 700,
-            keyframes: 20,
-            map_points: 1500,
-            mean_inliers: 300.0,
-            mean_outliers: 100.0,
+            keyframes: Some(20),
+            map_points: Some(1500),
+            mean_inliers: Some(300.0),
+            mean_outliers: Some(100.0),
             fps: 100.0,
             wall_s: 7.0,
             synth_seed: Some(0),
             loops: Some(0),
+            reason: None,
+            peak_rss_mb: None,
+            cpu_s: None,
         }
     }
 
@@ -557,7 +672,13 @@ mod tests {
     fn twins_print_the_paper_figures_of_the_sequence_they_imitate() {
         let catalog = Catalog::embedded();
         let records = [record("twin_fr1_360", 0.036), record("kinect", 0.001)];
-        let t = table3(&records, &catalog, true, &FolderSettings::default());
+        let t = table3(
+            &records,
+            &catalog,
+            true,
+            &FolderSettings::default(),
+            &BTreeMap::new(),
+        );
         let line = |name: &str| {
             t.markdown
                 .lines()

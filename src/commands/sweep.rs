@@ -3,9 +3,10 @@
 //! and shardable over a cluster's job array.
 
 use crate::config_file::{base_config, overlay_file};
+use crate::external::system::{systems_in_file, SystemDef};
 use crate::runner::{run_extracted, ExtractedSequence};
 use crate::select::{open, LoadOptions, Source};
-use crate::sweep::plan::{expand, parse_values, ConfigKind, Grids, Job, Shard};
+use crate::sweep::plan::{expand, parse_values, ConfigKind, Grids, Job, RunConfig, Shard};
 use crate::sweep::store::{pin_settings, FolderSettings, RunRecord, RunStore};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{write_atomic, write_tum};
@@ -42,9 +43,15 @@ pub struct SweepArgs {
     #[arg(long = "all-synthetic")]
     pub all_synthetic: bool,
     /// Configurations, comma-separated: the paper's orb, mcor, avc, mcor+avc; MC-OR with
-    /// every-frame clusters, mcor-frames and mcor-frames+avc; noisefree's rigid consensus, rc.
+    /// every-frame clusters, mcor-frames and mcor-frames+avc; noisefree's rigid consensus, rc;
+    /// and any external SLAM system the --config file declares under [systems.NAME] (e.g. the
+    /// real ORB-SLAM2, see the README).
     #[arg(long, default_value = "orb,mcor,avc,mcor+avc", value_name = "LIST")]
     pub configs: String,
+    /// Where synthetic sequences are written for external systems, with their settings files
+    /// and associations [default: <out>/cache, ignored by git].
+    #[arg(long = "cache-dir", value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
     /// MC-OR tau_MF values in metres: a list `0.1,0.3` or a range `start:stop:step`.
     #[arg(long = "tau-mf", default_value = "0.7", value_name = "VALUES")]
     pub tau_mf: String,
@@ -160,22 +167,29 @@ fn sources(args: &SweepArgs, catalog: &Catalog) -> Result<Vec<Source>> {
     Ok(out)
 }
 
-/// The configuration of one job.
+/// The configuration of one job of ours.
+///
+/// # Panics
+/// When the job is an external system's (a caller bug).
 pub fn job_config(base: &Config, job: &Job) -> Config {
+    let kind = job
+        .config
+        .kind()
+        .expect("noisefree's configuration of an external system's job");
     let mut c = base.clone();
     c.seed = job.seed;
-    c.mcor = job.kind.mcor().then(|| {
+    c.mcor = kind.mcor().then(|| {
         let mut m = base.mcor.clone().unwrap_or_default();
         m.tau_mf = job.params.tau_mf.unwrap_or(m.tau_mf);
         m.tau_gf = job.params.tau_gf.unwrap_or(m.tau_gf);
         m.tau_mg = job.params.tau_mg.unwrap_or(m.tau_mg);
-        if let Some(views) = job.kind.cluster_views() {
+        if let Some(views) = kind.cluster_views() {
             m.cluster_views = views;
         }
         m
     });
-    c.rc = job.kind.rc().then(|| base.rc.clone().unwrap_or_default());
-    c.avc = job.kind.avc().then(|| {
+    c.rc = kind.rc().then(|| base.rc.clone().unwrap_or_default());
+    c.avc = kind.avc().then(|| {
         let mut a = base.avc.clone().unwrap_or_default();
         a.baseline = job.params.baseline.unwrap_or(a.baseline);
         a
@@ -185,7 +199,7 @@ pub fn job_config(base: &Config, job: &Job) -> Config {
 
 /// A file-name-safe tag of a job's configuration and parameters.
 pub fn job_tag(job: &Job) -> String {
-    let mut tag = job.kind.name().replace('+', "-");
+    let mut tag = job.config.name().replace('+', "-");
     let p = &job.params;
     if let (Some(a), Some(b), Some(c)) = (p.tau_mf, p.tau_gf, p.tau_mg) {
         tag.push_str(&format!("_t{a}-{b}-{c}"));
@@ -200,11 +214,27 @@ pub fn job_tag(job: &Job) -> String {
 pub fn run(args: SweepArgs) -> Result<()> {
     let catalog = Catalog::embedded();
     let srcs = sources(&args, &catalog)?;
-    let kinds: Vec<ConfigKind> = args
+    let systems: std::collections::BTreeMap<String, SystemDef> = match &args.config {
+        Some(p) => systems_in_file(p)?,
+        None => Default::default(),
+    };
+    let kinds: Vec<RunConfig> = args
         .configs
         .split(',')
-        .filter(|s| !s.trim().is_empty())
-        .map(ConfigKind::parse)
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| match ConfigKind::parse(s) {
+            Ok(k) => Ok(RunConfig::Ours(k)),
+            Err(_) if systems.contains_key(s) => Ok(RunConfig::System(s.to_string())),
+            Err(e) => Err(if systems.is_empty() {
+                e.context("an external system would be declared under [systems.NAME] in --config")
+            } else {
+                e.context(format!(
+                    "nor one of the systems of the config file ({})",
+                    systems.keys().cloned().collect::<Vec<_>>().join(", ")
+                ))
+            }),
+        })
         .collect::<Result<_>>()?;
     if kinds.is_empty() {
         bail!("--configs is empty");
@@ -282,6 +312,25 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 w
             },
         },
+    )?;
+    let used: std::collections::BTreeMap<String, SystemDef> = kinds
+        .iter()
+        .filter_map(|k| match k {
+            RunConfig::System(name) => Some((name.clone(), systems[name].clone())),
+            RunConfig::Ours(_) => None,
+        })
+        .collect();
+    {
+        let recorded = crate::sweep::store::load_dir(&args.out)?;
+        crate::external::system::pin_systems(&args.out, &used, |name| {
+            recorded.iter().any(|r| r.config == name)
+        })?;
+    }
+    let cache = crate::external::export::cache_root(
+        &args
+            .cache_dir
+            .clone()
+            .unwrap_or_else(|| args.out.join("cache")),
     )?;
     let mine: Vec<&Job> = all_jobs
         .iter()
@@ -363,6 +412,38 @@ pub fn run(args: SweepArgs) -> Result<()> {
                         gt,
                     )?;
                 }
+            }
+            // External systems' runs first: each a child process on the sequence on disk.
+            let (jobs, theirs): (Vec<&Job>, Vec<&Job>) =
+                jobs.into_iter().partition(|j| j.config.kind().is_some());
+            if !theirs.is_empty() {
+                run_external_jobs(
+                    &theirs,
+                    &systems,
+                    ExternalContext {
+                        source: src,
+                        seq: &seq,
+                        frames: frames.len(),
+                        catalog: &catalog,
+                        opts: &opts,
+                        cache: &cache,
+                        out: &args.out,
+                        store: &store,
+                    },
+                    &pool,
+                    &multi,
+                    || {
+                        // Reserve a slot first, so parallel runs never overshoot --max-runs.
+                        started_runs.fetch_add(1, Ordering::SeqCst) < max_runs
+                    },
+                    || {
+                        finished.fetch_add(1, Ordering::SeqCst);
+                        overall.inc(1);
+                    },
+                )?;
+            }
+            if jobs.is_empty() {
+                continue;
             }
             let mut base = base_config(seq.camera.sensor);
             if let Some(p) = &args.config {
@@ -465,6 +546,109 @@ pub fn run(args: SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// What the runs of external systems on one sequence share.
+struct ExternalContext<'a> {
+    source: &'a Source,
+    seq: &'a datasets::Sequence,
+    frames: usize,
+    catalog: &'a Catalog,
+    opts: &'a LoadOptions,
+    cache: &'a Path,
+    out: &'a Path,
+    store: &'a RunStore,
+}
+
+/// Runs the jobs of external systems on one sequence in parallel, each recorded as it ends.
+/// Systems without a command for the sequence's sensor are skipped with a note. `reserve`
+/// says whether a run may start (`--max-runs`), `done` counts a finished one.
+fn run_external_jobs(
+    jobs: &[&Job],
+    systems: &std::collections::BTreeMap<String, SystemDef>,
+    cx: ExternalContext<'_>,
+    pool: &rayon::ThreadPool,
+    multi: &MultiProgress,
+    reserve: impl Fn() -> bool + Sync,
+    done: impl Fn() + Sync,
+) -> Result<()> {
+    let sensor = cx.seq.camera.sensor;
+    let mut runnable: Vec<(&Job, crate::external::system::Resolved)> = Vec::new();
+    let mut skipped = std::collections::BTreeSet::new();
+    for job in jobs {
+        let name = job.config.name();
+        match systems[name].resolve(name, sensor)? {
+            Some(r) => runnable.push((job, r)),
+            None => {
+                skipped.insert(name.to_string());
+            }
+        }
+    }
+    for name in skipped {
+        multi.suspend(|| {
+            eprintln!(
+                "note: system {name} has no {} command; not run on {}",
+                match sensor {
+                    slam_core::SensorKind::Rgbd => "rgbd",
+                    slam_core::SensorKind::Stereo => "stereo",
+                },
+                cx.source.label()
+            )
+        });
+    }
+    if runnable.is_empty() {
+        return Ok(());
+    }
+    let disk = multi.suspend(|| {
+        crate::external::export::prepare(
+            cx.source, cx.seq, cx.frames, cx.catalog, cx.opts, cx.cache,
+        )
+    })?;
+    let mut vocabularies = std::collections::BTreeMap::new();
+    for (_, r) in &runnable {
+        let v = match &r.vocabulary {
+            Some(v) => v.clone(),
+            None => crate::external::export::vocabulary_text(cx.cache)?,
+        };
+        vocabularies.insert(r.name.clone(), v);
+    }
+    let bar = multi.add(ProgressBar::new(runnable.len() as u64));
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} external runs {msg}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(cx.source.label());
+    let results: Vec<Result<()>> = pool.install(|| {
+        runnable
+            .par_iter()
+            .map(|(job, system)| {
+                if !reserve() {
+                    return Ok(());
+                }
+                let rec = crate::external::run::run_job(
+                    system,
+                    &disk,
+                    &vocabularies[&system.name],
+                    cx.seq,
+                    job,
+                    cx.out,
+                )
+                .with_context(|| {
+                    format!("{} seed {} on {}", system.name, job.seed, job.sequence)
+                })?;
+                if let Some(r) = &rec.reason {
+                    bar.set_message(format!("({} seed {}: {r})", system.name, job.seed));
+                }
+                cx.store.append(&rec)?;
+                done();
+                bar.inc(1);
+                Ok(())
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    results.into_iter().collect()
+}
+
 /// Runs one job on a sequence's extracted features (those with the job's ORB settings), writes
 /// its trajectory (in the ground truth's frame, for the figures) and, for seed 0, its
 /// per-frame statistics; returns its record.
@@ -501,7 +685,7 @@ fn run_job(
     let (mean_inliers, mean_outliers) = o.mean_inliers_outliers();
     Ok(RunRecord {
         sequence: job.sequence.clone(),
-        config: job.kind.name().to_string(),
+        config: job.config.name().to_string(),
         tau_mf: job.params.tau_mf,
         tau_gf: job.params.tau_gf,
         tau_mg: job.params.tau_mg,
@@ -511,14 +695,17 @@ fn run_job(
         failed: o.failed,
         frames: o.frames,
         tracked: o.tracked,
-        keyframes: o.keyframes,
-        map_points: o.map_points,
-        mean_inliers,
-        mean_outliers,
+        keyframes: Some(o.keyframes),
+        map_points: Some(o.map_points),
+        mean_inliers: Some(mean_inliers),
+        mean_outliers: Some(mean_outliers),
         fps: o.fps(),
         wall_s: o.wall_s,
         synth_seed: job.synth_seed,
         loops: Some(o.loops.len()),
+        reason: None,
+        peak_rss_mb: None,
+        cpu_s: None,
     })
 }
 

@@ -37,7 +37,12 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         dir.display(),
         records.len()
     );
-    let t3 = table3(&records, catalog, paper, &settings_of(dir)?);
+    let labels: std::collections::BTreeMap<String, String> =
+        crate::external::system::systems_of(dir)?
+            .into_iter()
+            .map(|(n, d)| (n.clone(), d.label.unwrap_or(n)))
+            .collect();
+    let t3 = table3(&records, catalog, paper, &settings_of(dir)?, &labels);
     write_table(dir, "table3", &t3)?;
     all.push_str(&t3.markdown);
     if let Some(t1) = table1(&records, catalog) {
@@ -45,7 +50,7 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         all.push('\n');
         all.push_str(&t1.markdown);
     }
-    let t4 = table4(&records, catalog);
+    let t4 = table4(&records, catalog, &labels);
     write_table(dir, "table4", &t4)?;
     all.push('\n');
     all.push_str(&t4.markdown);
@@ -104,15 +109,24 @@ fn outlier_ratio(path: &Path) -> Result<Vec<(f64, f64)>> {
 /// (Fig. 1) and the outlier ratio over frames (Fig. 8).
 pub fn figures_for(dir: &Path, records: &[crate::sweep::store::RunRecord]) -> Result<()> {
     let fig = dir.join("figures");
+    // External systems are drawn under their column heading.
+    let labels = crate::external::system::systems_of(dir)?;
+    let name = |config: &str| -> String {
+        labels
+            .get(config)
+            .and_then(|d| d.label.clone())
+            .unwrap_or_else(|| config.to_string())
+    };
     let mut groups: Vec<(String, String, Vec<f64>)> = Vec::new();
     for r in records.iter().filter(|r| !r.failed) {
         let Some(a) = r.ate_rmse else { continue };
+        let config = name(&r.config);
         match groups
             .iter_mut()
-            .find(|g| g.0 == r.sequence && g.1 == r.config)
+            .find(|g| g.0 == r.sequence && g.1 == config)
         {
             Some(g) => g.2.push(a),
-            None => groups.push((r.sequence.clone(), r.config.clone(), vec![a])),
+            None => groups.push((r.sequence.clone(), config, vec![a])),
         }
     }
     if !groups.is_empty() {

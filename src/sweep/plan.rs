@@ -134,6 +134,34 @@ impl fmt::Display for ConfigKind {
     }
 }
 
+/// What a run runs: one of noisefree's configurations, or an external SLAM program declared in
+/// the config file (`[systems.NAME]`, see `crate::external`), by its name.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RunConfig {
+    /// noisefree in one of its configurations.
+    Ours(ConfigKind),
+    /// An external system, by the name of its definition.
+    System(String),
+}
+
+impl RunConfig {
+    /// The name in `runs.csv` and on the command line.
+    pub fn name(&self) -> &str {
+        match self {
+            RunConfig::Ours(k) => k.name(),
+            RunConfig::System(s) => s,
+        }
+    }
+
+    /// noisefree's configuration kind, `None` for an external system.
+    pub fn kind(&self) -> Option<ConfigKind> {
+        match self {
+            RunConfig::Ours(k) => Some(*k),
+            RunConfig::System(_) => None,
+        }
+    }
+}
+
 /// Parameters of one run beyond its configuration kind. `None` where the kind does not use it.
 #[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
 pub struct Params {
@@ -152,8 +180,8 @@ pub struct Params {
 pub struct Job {
     /// Sequence label (catalog name or folder name).
     pub sequence: String,
-    /// Configuration kind.
-    pub kind: ConfigKind,
+    /// Configuration: ours, or an external system.
+    pub config: RunConfig,
     /// Its parameters.
     pub params: Params,
     /// Seed of the run.
@@ -168,7 +196,7 @@ impl Job {
     pub fn key(&self) -> String {
         run_key(
             &self.sequence,
-            self.kind.name(),
+            self.config.name(),
             &self.params,
             self.seed,
             self.synth_seed,
@@ -211,12 +239,30 @@ pub struct Grids {
     pub baseline: Vec<f64>,
 }
 
-/// Expands sequences x kinds x grids x seeds into the ordered job list: sequence-major (so a
-/// sequence is decoded once and its runs go together), then kind, parameters, seed.
-pub fn expand(sequences: &[String], kinds: &[ConfigKind], grids: &Grids, runs: u64) -> Vec<Job> {
+/// Expands sequences x configurations x grids x seeds into the ordered job list:
+/// sequence-major (so a sequence is decoded once and its runs go together), then
+/// configuration, parameters, seed. External systems take no parameters.
+pub fn expand(sequences: &[String], configs: &[RunConfig], grids: &Grids, runs: u64) -> Vec<Job> {
     let mut jobs = Vec::new();
     for seq in sequences {
-        for &kind in kinds {
+        for config in configs {
+            let Some(kind) = config.kind() else {
+                for seed in 0..runs {
+                    jobs.push(Job {
+                        sequence: seq.clone(),
+                        config: config.clone(),
+                        params: Params {
+                            tau_mf: None,
+                            tau_gf: None,
+                            tau_mg: None,
+                            baseline: None,
+                        },
+                        seed,
+                        synth_seed: None,
+                    });
+                }
+                continue;
+            };
             let mut params = Vec::new();
             let mcor_grid: Vec<(Option<f64>, Option<f64>, Option<f64>)> = if kind.mcor() {
                 let mut v = Vec::new();
@@ -250,7 +296,7 @@ pub fn expand(sequences: &[String], kinds: &[ConfigKind], grids: &Grids, runs: u
                 for seed in 0..runs {
                     jobs.push(Job {
                         sequence: seq.clone(),
-                        kind,
+                        config: RunConfig::Ours(kind),
                         params: p,
                         seed,
                         synth_seed: None,
@@ -387,9 +433,17 @@ mod tests {
             tau_mg: vec![0.5],
             baseline: vec![0.05, 0.09],
         };
-        let jobs = expand(&["a".into(), "b".into()], &ConfigKind::ALL, &grids, 3);
-        // per sequence: orb 1 + mcor 2 + avc 2 + mcor+avc 4 = 9 parameter sets, x 3 seeds
-        assert_eq!(jobs.len(), 2 * 9 * 3);
+        let mut configs: Vec<RunConfig> = ConfigKind::ALL.map(RunConfig::Ours).to_vec();
+        configs.push(RunConfig::System("orbslam2".into()));
+        let jobs = expand(&["a".into(), "b".into()], &configs, &grids, 3);
+        // per sequence: orb 1 + mcor 2 + avc 2 + mcor+avc 4 = 9 parameter sets, and the
+        // external system's one, x 3 seeds
+        assert_eq!(jobs.len(), 2 * 10 * 3);
+        let external: Vec<&Job> = jobs.iter().filter(|j| j.config.kind().is_none()).collect();
+        assert_eq!(external.len(), 2 * 3);
+        assert!(external
+            .iter()
+            .all(|j| j.params.tau_mf.is_none() && j.params.baseline.is_none()));
         assert!(jobs[..27].iter().all(|j| j.sequence == "a"));
         let keys: std::collections::BTreeSet<String> = jobs.iter().map(Job::key).collect();
         assert_eq!(keys.len(), jobs.len(), "keys are unique");

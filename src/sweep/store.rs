@@ -39,14 +39,14 @@ pub struct RunRecord {
     pub frames: usize,
     /// Frames with a pose.
     pub tracked: usize,
-    /// Keyframes at the end.
-    pub keyframes: usize,
-    /// Map points at the end.
-    pub map_points: usize,
-    /// Mean inliers per frame.
-    pub mean_inliers: f64,
-    /// Mean outliers per frame.
-    pub mean_outliers: f64,
+    /// Keyframes at the end (empty for an external system, which does not say).
+    pub keyframes: Option<usize>,
+    /// Map points at the end (empty for an external system).
+    pub map_points: Option<usize>,
+    /// Mean inliers per frame (empty for an external system).
+    pub mean_inliers: Option<f64>,
+    /// Mean outliers per frame (empty for an external system).
+    pub mean_outliers: Option<f64>,
     /// Frames per second (one thread).
     pub fps: f64,
     /// Wall time of the run, seconds.
@@ -55,9 +55,21 @@ pub struct RunRecord {
     /// absent from records written before the column existed).
     #[serde(default)]
     pub synth_seed: Option<u64>,
-    /// Loops closed (empty in records written before loop closing existed).
+    /// Loops closed (empty in records written before loop closing existed, and for external
+    /// systems).
     #[serde(default)]
     pub loops: Option<usize>,
+    /// Why the run failed when its program did (an external system: `exit status 1`,
+    /// `timeout after 600 s`, `no trajectory`...); empty otherwise.
+    #[serde(default)]
+    pub reason: Option<String>,
+    /// Peak resident memory of an external system's process, MB (from `wait4`).
+    #[serde(default)]
+    pub peak_rss_mb: Option<f64>,
+    /// CPU time (user + system) of an external system's process, seconds: above `wall_s` for
+    /// a threaded system.
+    #[serde(default)]
+    pub cpu_s: Option<f64>,
 }
 
 impl RunRecord {
@@ -311,6 +323,9 @@ fn header() -> String {
         "wall_s",
         "synth_seed",
         "loops",
+        "reason",
+        "peak_rss_mb",
+        "cpu_s",
     ])
     .expect("in-memory write");
     String::from_utf8(w.into_inner().expect("in-memory")).expect("ascii")
@@ -349,6 +364,51 @@ pub struct RunStore {
     path: PathBuf,
     file: Mutex<File>,
     done: BTreeSet<String>,
+    /// The advisory lock on the record file (released when the store is dropped or the
+    /// process ends, however it ends).
+    _lock: File,
+}
+
+/// Takes the advisory lock of record file `path` (`<file>.lock`, holding who took it): one
+/// sweep at a time writes a record file, while the shards of one job array, each with its own
+/// file, write side by side. A second sweep is refused with the holder's pid and command line.
+fn lock(path: &Path) -> Result<File> {
+    let lock_path = path.with_extension("csv.lock");
+    let mut f = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&lock_path)
+        .with_context(|| format!("opening {}", lock_path.display()))?;
+    match f.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let holder = std::fs::read_to_string(&lock_path).unwrap_or_default();
+            bail!(
+                "another sweep is writing {} ({}): wait for it to finish, or use another --out \
+                 folder (shards of one sweep, --shard K/N, each write their own file and run \
+                 side by side)",
+                path.display(),
+                holder.trim()
+            );
+        }
+        Err(std::fs::TryLockError::Error(e)) => {
+            return Err(e).with_context(|| format!("locking {}", lock_path.display()))
+        }
+    }
+    let who = format!(
+        "pid {}, started {} s after the epoch: {}",
+        std::process::id(),
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs()),
+        std::env::args().collect::<Vec<_>>().join(" ")
+    );
+    f.set_len(0)?;
+    f.write_all(who.as_bytes())?;
+    f.flush()?;
+    Ok(f)
 }
 
 impl RunStore {
@@ -356,6 +416,7 @@ impl RunStore {
     pub fn open(dir: &Path, shard: Option<Shard>) -> Result<RunStore> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let path = dir.join(file_name(shard));
+        let lock = lock(&path)?;
         let mut done = BTreeSet::new();
         if path.exists() {
             let (records, torn) = read_records(&path)?;
@@ -383,6 +444,7 @@ impl RunStore {
             path,
             file: Mutex::new(file),
             done,
+            _lock: lock,
         })
     }
 
@@ -461,14 +523,17 @@ mod tests {
             failed: false,
             frames: 100,
             tracked: 100,
-            keyframes: 10,
-            map_points: 1000,
-            mean_inliers: 300.5,
-            mean_outliers: 10.25,
+            keyframes: Some(10),
+            map_points: Some(1000),
+            mean_inliers: Some(300.5),
+            mean_outliers: Some(10.25),
             fps: 80.0,
             wall_s: 1.25,
             synth_seed: Some(1),
             loops: Some(0),
+            reason: None,
+            peak_rss_mb: None,
+            cpu_s: None,
         }
     }
 
@@ -490,6 +555,22 @@ mod tests {
         assert!(!s.is_done(&rec("a", 2).key()));
         let all = load_dir(&d).unwrap();
         assert_eq!(all, vec![rec("a", 0), rec("a", 1)]);
+    }
+
+    #[test]
+    fn a_record_file_is_written_by_one_sweep_at_a_time() {
+        let dir = tmpdir("lock");
+        let first = RunStore::open(&dir, None).unwrap();
+        let e = format!("{:#}", RunStore::open(&dir, None).err().unwrap());
+        assert!(
+            e.contains("another sweep") && e.contains(&format!("pid {}", std::process::id())),
+            "{e}"
+        );
+        // Shards keep their own files and locks.
+        let shard = RunStore::open(&dir, Some(Shard { index: 1, count: 2 })).unwrap();
+        drop(first);
+        RunStore::open(&dir, None).expect("free again once the first store is gone");
+        drop(shard);
     }
 
     #[test]
