@@ -107,8 +107,15 @@ pub fn prepare(
                     }
                     let folder = cache.join("sequences").join(&key);
                     if !folder.is_dir() {
-                        write_synthetic(preset, &without, opts.synth_seed, frames, &folder)
-                            .with_context(|| format!("writing {name} to {}", folder.display()))?;
+                        let written =
+                            write_synthetic(preset, &without, opts.synth_seed, frames, &folder);
+                        // Another shard of the sweep may have put the same folder in place
+                        // first (each writes to its own staging folder, then renames).
+                        if !folder.is_dir() {
+                            written.with_context(|| {
+                                format!("writing {name} to {}", folder.display())
+                            })?;
+                        }
                     }
                     (folder, key)
                 }

@@ -48,6 +48,17 @@ pub fn read_estimate(
     Ok(t)
 }
 
+/// Whether a trajectory file holds no pose line (only blanks and `#` comments): a system that
+/// tracked nothing, which is a failed run of its own kind, not an unreadable file.
+fn no_poses(path: &Path) -> bool {
+    std::fs::read(path).is_ok_and(|b| {
+        String::from_utf8_lossy(&b)
+            .lines()
+            .map(str::trim)
+            .all(|l| l.is_empty() || l.starts_with('#'))
+    })
+}
+
 /// Keeps the last [`LOG_LINES`] lines of a log, saying how many were dropped.
 fn trim_log(path: &Path) {
     let Ok(bytes) = std::fs::read(path) else {
@@ -159,6 +170,8 @@ pub fn run_job(
                     |n| n.to_string_lossy().into_owned()
                 )
             ));
+        } else if no_poses(&trajectory) {
+            reason = Some("empty trajectory".into());
         } else {
             match read_estimate(&trajectory, system.format, disk.times_s.as_deref()) {
                 Ok(t) if t.is_empty() => reason = Some("empty trajectory".into()),

@@ -407,6 +407,28 @@ mod tests {
     }
 
     #[test]
+    fn the_shipped_definitions_are_valid() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("systems/orbslam.toml");
+        let defs = systems_in_file(&p).unwrap();
+        for name in ["orbslam2", "orbslam3", "noisefree-external"] {
+            for sensor in [SensorKind::Rgbd, SensorKind::Stereo] {
+                assert!(
+                    defs[name].resolve(name, sensor).unwrap().is_some(),
+                    "{name}"
+                );
+            }
+        }
+        let o3 = defs["orbslam3"]
+            .resolve("orbslam3", SensorKind::Stereo)
+            .unwrap()
+            .unwrap();
+        assert_eq!(o3.format, TrajectoryFormat::TumNs);
+        assert_eq!(o3.settings, Some(SettingsFormat::Orbslam3));
+        // Absolute program paths stay as written.
+        assert_eq!(o3.command[0], "/opt/orbslam3/Examples/Stereo/stereo_euroc");
+    }
+
+    #[test]
     fn sensor_fields_override_the_system_s() {
         let text = r#"
             [systems.s]

@@ -8,6 +8,8 @@
 //!   synthetic presets), [`data_root`];
 //! - [`fetch`]: download with resume, atomic unpack, verification;
 //! - [`cameras`]: the TUM cameras and depth factors; [`decode`]: PNG decoding.
+//! - [`settings`]: ORB-SLAM2 / ORB-SLAM3 camera settings files (YAML), written from a
+//!   sequence's camera and read back ([`open_path_with_settings`]).
 //!
 //! Every sequence is decoded once into a [`Sequence`] whose images are `Arc`-shared, so the
 //! runs of a sweep share one copy read-only (see [`sequence`] for the memory it takes).

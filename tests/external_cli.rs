@@ -1,0 +1,362 @@
+//! External SLAM systems in a sweep (`[systems.NAME]` in the config file).
+//!
+//! The test that cannot be faked: noisefree itself declared as an external system (its `run`
+//! command through the template, its camera from the exported settings file with `--camera`)
+//! gives the same ATE, bit for bit, as the internal `orb` configuration, on a small synthetic
+//! RGB-D sequence and on the stereo preset. That holds only if the sequence export (TUM and
+//! EuRoC layouts), the settings file round trip, the trajectory pickup and the scoring (body
+//! frame, association) are all exact.
+//!
+//! Then programs that fail every way a program can (exit 1, sleep past the timeout, write
+//! nothing, write garbage): each run is recorded as failed with its reason, the sweep
+//! completes, and the table marks and explains them. And a folder being swept is locked.
+
+mod common;
+
+use common::{assert_clean_failure, noisefree, noisefree_ok, tmpdir};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The records of `runs.csv` as (sequence, config, seed) -> column -> value.
+fn records(dir: &Path) -> BTreeMap<(String, String, String), BTreeMap<String, String>> {
+    let mut rdr = csv::Reader::from_path(dir.join("runs.csv")).expect("runs.csv");
+    let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
+    let mut out = BTreeMap::new();
+    for row in rdr.records() {
+        let row = row.unwrap();
+        let m: BTreeMap<String, String> = header
+            .iter()
+            .cloned()
+            .zip(row.iter().map(String::from))
+            .collect();
+        out.insert(
+            (
+                m["sequence"].clone(),
+                m["config"].clone(),
+                m["seed"].clone(),
+            ),
+            m,
+        );
+    }
+    out
+}
+
+fn config_file(dir: &Path, text: &str) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let p = dir.join("systems.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const SELF_COMMAND: &str = r#"["{noisefree}", "run", "--path", "{sequence}", "--camera", "{settings}", "--seed", "{seed}", "--frames", "{frames}", "--out", "{run_dir}/out", "--quiet"]"#;
+
+#[test]
+fn noisefree_as_an_external_system_scores_bit_for_bit_as_the_internal_orb() {
+    let dir = tmpdir("external-self");
+    let cfg = config_file(
+        &dir,
+        &format!(
+            "[systems.self]\nlabel = \"noisefree (external)\"\nsettings = \"orbslam2\"\n\
+             timeout_s = 600\n[systems.self.rgbd]\ncommand = {SELF_COMMAND}\n\
+             trajectory = \"out/trajectory.txt\"\n[systems.self.stereo]\ncommand = {SELF_COMMAND}\n\
+             trajectory = \"out/trajectory.txt\"\n"
+        ),
+    );
+    let out = dir.join("sweep");
+    let cfg_s = cfg.to_str().unwrap();
+    let out_s = out.to_str().unwrap();
+    noisefree_ok(&[
+        "sweep",
+        "--seq",
+        "kinect,stereo",
+        "--frames",
+        "40",
+        "--runs",
+        "1",
+        "--configs",
+        "orb,self",
+        "--config",
+        cfg_s,
+        "--out",
+        out_s,
+        "--quiet",
+    ]);
+    let recs = records(&out);
+    for seq in ["kinect", "stereo"] {
+        let ours = &recs[&(seq.into(), "orb".into(), "0".into())];
+        let theirs = &recs[&(seq.into(), "self".into(), "0".into())];
+        assert!(!ours["ate_rmse"].is_empty(), "{seq}: {ours:?}");
+        assert_eq!(
+            ours["ate_rmse"], theirs["ate_rmse"],
+            "{seq}: the same ATE, bit for bit"
+        );
+        assert_eq!(theirs["failed"], "false");
+        assert_eq!(theirs["tracked"], ours["tracked"]);
+        assert_eq!(theirs["reason"], "");
+        assert!(
+            theirs["peak_rss_mb"].parse::<f64>().unwrap() > 1.0,
+            "{theirs:?}"
+        );
+        assert!(theirs["cpu_s"].parse::<f64>().unwrap() > 0.0);
+        assert!(theirs["fps"].parse::<f64>().unwrap() > 0.0);
+        assert_eq!(
+            theirs["keyframes"], "",
+            "an external system reports no keyframes"
+        );
+    }
+    // The stereo run's settings carried the rectification; the sequence went to the cache in
+    // the EuRoC layout, the RGB-D one in TUM's.
+    let cache = out.join("cache");
+    assert!(cache.join("sequences/kinect-seed0-40f/rgb.txt").is_file());
+    assert!(cache
+        .join("sequences/stereo-seed0-40f/mav0/cam0/data.csv")
+        .is_file());
+    let settings =
+        std::fs::read_to_string(cache.join("aux/stereo-seed0-40f/settings-orbslam2.yaml")).unwrap();
+    assert!(settings.contains("LEFT.R: !!opencv-matrix"), "{settings}");
+    assert!(std::fs::read_to_string(cache.join(".gitignore"))
+        .unwrap()
+        .contains('*'));
+    // A resumed sweep runs nothing again.
+    noisefree_ok(&[
+        "sweep",
+        "--seq",
+        "kinect,stereo",
+        "--frames",
+        "40",
+        "--runs",
+        "1",
+        "--configs",
+        "orb,self",
+        "--config",
+        cfg_s,
+        "--out",
+        out_s,
+        "--quiet",
+    ]);
+    assert_eq!(records(&out).len(), 4);
+    // The table puts the system's label beside ours.
+    let t = noisefree_ok(&["table", out_s, "--print"]);
+    let text = String::from_utf8_lossy(&t.stdout);
+    assert!(text.contains("| noisefree (external) |"), "{text}");
+}
+
+#[test]
+fn failing_programs_are_failed_runs_with_their_reason_and_the_sweep_completes() {
+    let dir = tmpdir("external-fail");
+    let script = |body: &str| format!("[\"sh\", \"-c\", \"{body}\"]");
+    let mut text = String::new();
+    for (name, body, timeout) in [
+        (
+            "exits",
+            "echo loading >&2; echo cannot open camera >&2; exit 1",
+            60.0,
+        ),
+        ("sleeps", "sleep 30", 1.0),
+        ("silent", "true", 60.0),
+        ("garbage", "echo garbage here > CameraTrajectory.txt", 60.0),
+        (
+            "empty",
+            "echo '# nothing tracked' > CameraTrajectory.txt",
+            60.0,
+        ),
+    ] {
+        text += &format!(
+            "[systems.{name}]\ntimeout_s = {timeout}\n[systems.{name}.rgbd]\ncommand = {}\n",
+            script(body)
+        );
+    }
+    let cfg = config_file(&dir, &text);
+    let out = dir.join("sweep");
+    let (cfg_s, out_s) = (cfg.to_str().unwrap(), out.to_str().unwrap());
+    let started = std::time::Instant::now();
+    noisefree_ok(&[
+        "sweep",
+        "--seq",
+        "kinect",
+        "--frames",
+        "5",
+        "--runs",
+        "2",
+        "--configs",
+        "exits,sleeps,silent,garbage,empty",
+        "--config",
+        cfg_s,
+        "--out",
+        out_s,
+        "--quiet",
+        "--jobs",
+        "2",
+    ]);
+    assert!(
+        started.elapsed().as_secs() < 25,
+        "the timeout ended the sleeper"
+    );
+    let recs = records(&out);
+    assert_eq!(recs.len(), 10);
+    for (name, want) in [
+        ("exits", "exit status 1"),
+        ("sleeps", "timeout after 1 s"),
+        ("silent", "no trajectory (CameraTrajectory.txt not written)"),
+        ("garbage", "unreadable trajectory"),
+        ("empty", "empty trajectory"),
+    ] {
+        for seed in ["0", "1"] {
+            let r = &recs[&("kinect".into(), name.into(), seed.into())];
+            assert_eq!(r["failed"], "true", "{name}: {r:?}");
+            assert!(r["reason"].starts_with(want), "{name}: {}", r["reason"]);
+            assert_eq!(r["ate_rmse"], "");
+        }
+    }
+    // The last lines of the program's stderr stay in the run folder.
+    let run = out.join("external/kinect/exits/seed0");
+    let failure = std::fs::read_to_string(run.join("failure.txt")).unwrap();
+    assert!(
+        failure.contains("exit status 1") && failure.contains("cannot open camera"),
+        "{failure}"
+    );
+    assert!(std::fs::read_to_string(run.join("command.txt"))
+        .unwrap()
+        .contains("sh -c"));
+    // The table marks them and says why.
+    let t = noisefree_ok(&["table", out_s, "--print"]);
+    let text = String::from_utf8_lossy(&t.stdout);
+    let row = text.lines().find(|l| l.starts_with("| kinect |")).unwrap();
+    assert_eq!(row.matches("| F").count(), 5, "{row}");
+    assert!(text.contains("kinect: 2 x timeout after 1 s"), "{text}");
+}
+
+#[test]
+fn a_folder_being_swept_is_locked_and_bad_definitions_are_refused() {
+    let dir = tmpdir("external-lock");
+    let cfg = config_file(
+        &dir,
+        "[systems.slow]\ntimeout_s = 20\n[systems.slow.rgbd]\ncommand = [\"sleep\", \"4\"]\n",
+    );
+    let out = dir.join("sweep");
+    let (cfg_s, out_s) = (cfg.to_str().unwrap(), out.to_str().unwrap());
+    let args = [
+        "sweep",
+        "--seq",
+        "kinect",
+        "--frames",
+        "3",
+        "--runs",
+        "1",
+        "--configs",
+        "slow",
+        "--config",
+        cfg_s,
+        "--out",
+        out_s,
+        "--quiet",
+    ];
+    let mut first = std::process::Command::new(env!("CARGO_BIN_EXE_noisefree"))
+        .args(args)
+        .spawn()
+        .unwrap();
+    // Wait until the first sweep holds the lock (its record file exists).
+    let t0 = std::time::Instant::now();
+    while !out.join("runs.csv.lock").exists() && t0.elapsed().as_secs() < 20 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let second = noisefree(&args);
+    assert_clean_failure(&second, "another sweep is writing");
+    assert_clean_failure(&second, &format!("pid {}", first.id()));
+    assert!(first.wait().unwrap().success());
+    assert_eq!(records(&out).len(), 1, "the run was made once");
+
+    // An unknown configuration names the systems the file declares; a typo in a placeholder
+    // is caught before anything runs.
+    let e = noisefree(&[
+        "sweep",
+        "--seq",
+        "kinect",
+        "--configs",
+        "slo",
+        "--config",
+        cfg_s,
+        "--out",
+        out_s,
+    ]);
+    assert_clean_failure(&e, "slow");
+    let bad = config_file(
+        &dir.join("bad"),
+        "[systems.b]\n[systems.b.rgbd]\ncommand = [\"x\", \"{setings}\"]\n",
+    );
+    let e = noisefree(&[
+        "sweep",
+        "--seq",
+        "kinect",
+        "--configs",
+        "b",
+        "--config",
+        bad.to_str().unwrap(),
+        "--out",
+        dir.join("o2").to_str().unwrap(),
+    ]);
+    assert_clean_failure(&e, "{setings}");
+}
+
+#[test]
+fn settings_command_and_run_camera() {
+    let dir = tmpdir("settings-cli");
+    std::fs::create_dir_all(&dir).unwrap();
+    let yaml = dir.join("TUM1.yaml");
+    noisefree_ok(&[
+        "settings",
+        "--seq",
+        "twin_fr1_desk",
+        "--format",
+        "orbslam2",
+        "-o",
+        yaml.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    assert!(
+        text.starts_with("%YAML:1.0\n") && text.contains("Camera.k3: 1.163314"),
+        "{text}"
+    );
+    let o3 = noisefree_ok(&["settings", "--seq", "twin_v101", "--format", "orbslam3"]);
+    let t3 = String::from_utf8_lossy(&o3.stdout);
+    assert!(
+        t3.contains("File.version: \"1.0\"") && t3.contains("Stereo.T_c1_c2"),
+        "{t3}"
+    );
+    // A folder not named like a TUM sequence runs with the camera of its settings file.
+    let folder = dir.join("my_recording");
+    noisefree_ok(&[
+        "synth",
+        "--preset",
+        "twin_fr1_desk",
+        "--frames",
+        "3",
+        "--seed",
+        "0",
+        "--out",
+        folder.to_str().unwrap(),
+    ]);
+    let r = noisefree_ok(&[
+        "run",
+        "--path",
+        folder.to_str().unwrap(),
+        "--camera",
+        yaml.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--out",
+        dir.join("o").to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(String::from_utf8_lossy(&r.stdout).contains("tracked 3/3"));
+    // --camera is refused for a synthetic sequence, and a bad file is named.
+    let e = noisefree(&[
+        "run",
+        "--path",
+        folder.to_str().unwrap(),
+        "--camera",
+        "/nonexistent/x.yaml",
+    ]);
+    assert_clean_failure(&e, "x.yaml");
+}
