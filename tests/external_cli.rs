@@ -117,6 +117,19 @@ fn noisefree_as_an_external_system_scores_bit_for_bit_as_the_internal_orb() {
     assert!(std::fs::read_to_string(cache.join(".gitignore"))
         .unwrap()
         .contains('*'));
+    // ORB-SLAM2's rgbd_tum takes every line of the associations file for a frame: no comments.
+    let assoc =
+        std::fs::read_to_string(cache.join("aux/kinect-seed0-40f/associations.txt")).unwrap();
+    assert_eq!(assoc.lines().count(), 40);
+    assert!(assoc
+        .lines()
+        .all(|l| l.split_whitespace().count() == 4 && !l.starts_with('#')));
+    let times = std::fs::read_to_string(cache.join("aux/stereo-seed0-40f/times.txt")).unwrap();
+    assert_eq!(times.lines().count(), 40);
+    assert!(
+        times.lines().all(|l| l.parse::<i64>().is_ok()),
+        "ns stamps, one a line"
+    );
     // A resumed sweep runs nothing again.
     noisefree_ok(&[
         "sweep",

@@ -146,7 +146,8 @@ pub fn prepare(
                     pairs.len()
                 );
             }
-            let mut text = String::from("# t_rgb rgb t_depth depth (the run's frames)\n");
+            // No comment line: ORB-SLAM2's and ORB-SLAM3's rgbd_tum take every line for a frame.
+            let mut text = String::new();
             for (a, b) in &pairs[..frames] {
                 let _ = writeln!(text, "{} {} {} {}", a.stamp, a.file, b.stamp, b.file);
             }
