@@ -231,6 +231,35 @@ fn failing_programs_are_failed_runs_with_their_reason_and_the_sweep_completes() 
     assert!(std::fs::read_to_string(run.join("command.txt"))
         .unwrap()
         .contains("sh -c"));
+    // Fixed, and run again with --retry-failed: the failed runs are replaced, not doubled.
+    let fixed = config_file(
+        &dir.join("fixed"),
+        &text.replace("exit 1", "echo 0 0 0 0 0 0 0 1 > CameraTrajectory.txt"),
+    );
+    noisefree_ok(&[
+        "sweep",
+        "--seq",
+        "kinect",
+        "--frames",
+        "5",
+        "--runs",
+        "2",
+        "--configs",
+        "exits",
+        "--config",
+        fixed.to_str().unwrap(),
+        "--out",
+        out_s,
+        "--quiet",
+        "--retry-failed",
+    ]);
+    let recs = records(&out);
+    assert_eq!(recs.len(), 10, "each run recorded once");
+    let again = &recs[&("kinect".into(), "exits".into(), "0".into())];
+    assert!(
+        !again["reason"].starts_with("exit status"),
+        "the run was made again: {again:?}"
+    );
     // The table marks them and says why.
     let t = noisefree_ok(&["table", out_s, "--print"]);
     let text = String::from_utf8_lossy(&t.stdout);

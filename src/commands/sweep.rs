@@ -114,6 +114,11 @@ pub struct SweepArgs {
     /// sensitivity to the noise rather than only to RANSAC.
     #[arg(long = "vary-sequence")]
     pub vary_sequence: bool,
+    /// Run again the runs an external system failed (those with a `reason` in runs.csv: a
+    /// non-zero exit, a timeout, no trajectory...), e.g. after fixing its definition; without
+    /// it a resumed sweep keeps every recorded run, failed ones included.
+    #[arg(long = "retry-failed")]
+    pub retry_failed: bool,
     /// Stop after this many runs have finished in this invocation (for testing resumption).
     #[arg(long = "max-runs", value_name = "N", hide = true)]
     pub max_runs: Option<usize>,
@@ -270,7 +275,12 @@ pub fn run(args: SweepArgs) -> Result<()> {
             });
         }
     }
-    let store = RunStore::open(&args.out, shard)?;
+    // --retry-failed: this sweep's runs that an external program failed (a reason recorded)
+    // run again.
+    let keys: std::collections::BTreeSet<String> = all_jobs.iter().map(Job::key).collect();
+    let store = RunStore::open_dropping(&args.out, shard, |r| {
+        args.retry_failed && r.reason.is_some() && keys.contains(&r.key())
+    })?;
     // The config file over the defaults, read once for the folder's settings.
     let file_config = args
         .config

@@ -36,14 +36,18 @@ pub struct OnDisk {
 }
 
 impl OnDisk {
-    /// The settings file in `format`, written on first use.
-    pub fn settings_file(&self, format: SettingsFormat) -> Result<PathBuf> {
-        let path = self.aux.join(format!("settings-{}.yaml", format.name()));
-        if !path.is_file() {
+    /// The settings file in `format` (written by [`prepare`], before the runs start).
+    pub fn settings_file(&self, format: SettingsFormat) -> PathBuf {
+        self.aux.join(format!("settings-{}.yaml", format.name()))
+    }
+
+    /// Writes the settings file in every layout (once, before parallel runs read them).
+    fn write_settings_files(&self) -> Result<()> {
+        for format in [SettingsFormat::Orbslam2, SettingsFormat::Orbslam3] {
             let text = write_settings(&self.settings, format, &self.label);
-            ate_eval::io::write_atomic(&path, text.as_bytes())?;
+            ate_eval::io::write_atomic(&self.settings_file(format), text.as_bytes())?;
         }
-        Ok(path)
+        Ok(())
     }
 }
 
@@ -195,6 +199,7 @@ pub fn prepare(
             }
         }
     }
+    out.write_settings_files()?;
     Ok(out)
 }
 

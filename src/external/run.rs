@@ -107,7 +107,7 @@ pub fn run_job(
         values.insert("noisefree", exe.display().to_string());
     }
     if let Some(f) = system.settings {
-        values.insert("settings", text(&disk.settings_file(f)?));
+        values.insert("settings", text(&disk.settings_file(f)));
     }
     for (key, path) in [
         ("associations", &disk.associations),

@@ -413,13 +413,29 @@ fn lock(path: &Path) -> Result<File> {
 
 impl RunStore {
     /// Opens (or creates) the record in `dir` for `shard`, repairing a torn last line.
+    #[cfg(test)]
     pub fn open(dir: &Path, shard: Option<Shard>) -> Result<RunStore> {
+        RunStore::open_dropping(dir, shard, |_| false)
+    }
+
+    /// As [`RunStore::open`], first removing from this record file the runs `drop` picks, so
+    /// they run again (`sweep --retry-failed`: the runs an external program failed, after its
+    /// definition was fixed).
+    pub fn open_dropping(
+        dir: &Path,
+        shard: Option<Shard>,
+        drop: impl Fn(&RunRecord) -> bool,
+    ) -> Result<RunStore> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let path = dir.join(file_name(shard));
         let lock = lock(&path)?;
         let mut done = BTreeSet::new();
         if path.exists() {
-            let (records, torn) = read_records(&path)?;
+            let (mut records, mut torn) = read_records(&path)?;
+            let before = records.len();
+            records.retain(|r| !drop(r));
+            // Rewritten whole (atomically) when runs were dropped.
+            torn |= records.len() != before;
             // A record from before a column was added gets the current header (rows re-written
             // with the new column empty), so appended rows match it.
             let old_header = std::fs::read_to_string(&path)
@@ -555,6 +571,23 @@ mod tests {
         assert!(!s.is_done(&rec("a", 2).key()));
         let all = load_dir(&d).unwrap();
         assert_eq!(all, vec![rec("a", 0), rec("a", 1)]);
+    }
+
+    #[test]
+    fn dropped_runs_leave_the_record_and_run_again() {
+        let d = tmpdir("drop");
+        let s = RunStore::open(&d, None).unwrap();
+        let mut failed = rec("a", 1);
+        failed.failed = true;
+        failed.reason = Some("exit status 1".into());
+        s.append(&rec("a", 0)).unwrap();
+        s.append(&failed).unwrap();
+        drop(s);
+        let s = RunStore::open_dropping(&d, None, |r| r.reason.is_some()).unwrap();
+        assert!(s.is_done(&rec("a", 0).key()));
+        assert!(!s.is_done(&failed.key()), "a dropped run is not done");
+        drop(s);
+        assert_eq!(load_dir(&d).unwrap().len(), 1);
     }
 
     #[test]
