@@ -418,7 +418,7 @@ impl RunStore {
         RunStore::open_dropping(dir, shard, |_| false)
     }
 
-    /// As [`RunStore::open`], first removing from this record file the runs `drop` picks, so
+    /// Opens (or creates) the record in `dir` for `shard`, repairing a torn last line, first removing from this record file the runs `drop` picks, so
     /// they run again (`sweep --retry-failed`: the runs an external program failed, after its
     /// definition was fixed).
     pub fn open_dropping(
