@@ -105,14 +105,21 @@ pub fn prepare(
                     let mut without = opts.synth_without.clone();
                     without.sort();
                     without.dedup();
-                    let mut key = format!("{}-seed{}-{frames}f", safe(name), opts.synth_seed);
+                    // The generator's frames, as in memory: a twin's free-running depth
+                    // stream can pair fewer frames than were rendered (a frame drops out as
+                    // on real fr1/fr2 data), so the run's frame count is not the rendered one.
+                    let rendered = match opts.frames {
+                        Some(n) => n,
+                        None => synth::Preset::from_name(preset)?.default_frames(),
+                    };
+                    let mut key = format!("{}-seed{}-{rendered}f", safe(name), opts.synth_seed);
                     if !without.is_empty() {
                         key += &format!("-without-{}", safe(&without.join("-")));
                     }
                     let folder = cache.join("sequences").join(&key);
                     if !folder.is_dir() {
                         let written =
-                            write_synthetic(preset, &without, opts.synth_seed, frames, &folder);
+                            write_synthetic(preset, &without, opts.synth_seed, rendered, &folder);
                         // Another shard of the sweep may have put the same folder in place
                         // first (each writes to its own staging folder, then renames).
                         if !folder.is_dir() {
