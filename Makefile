@@ -1,11 +1,12 @@
 # noisefree — common tasks. `make help` lists them.
-.PHONY: help run test bench lint fmt results golden vocabulary
+.PHONY: help run test bench lint layers fmt results golden vocabulary
 
 help:
 	@echo "make run    - run the SLAM system on the embedded synthetic default (release build)"
 	@echo "make test   - the whole test suite (the README's test command)"
 	@echo "make bench  - criterion benchmarks of every crate (release)"
 	@echo "make lint   - cargo fmt --check + clippy -D warnings"
+	@echo "make layers - import graphs of synth and ate-eval: no circle, no import running back up"
 	@echo "make fmt    - format the code"
 	@echo "make golden - rewrite tests/golden/regression.toml (only for an intended change; see README)"
 	@echo "make vocabulary - retrain assets/vocabulary/noisefree-k10L5.voc (renders + real EuRoC frames)"
@@ -23,6 +24,13 @@ bench:
 lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
+
+# The layers each crate's lib.rs map declares, lowest first (doc-comment links counted too).
+layers:
+	python3 tools/import_graph.py crates/synth/src --docs --quiet \
+	  --layers "error hash | world | motion | sensor | spec | generator | output | catalog"
+	python3 tools/import_graph.py crates/ate-eval/src --docs --quiet \
+	  --layers "error trajectory stats | associate align | stamps | io | ate | rpe"
 
 fmt:
 	cargo fmt --all

@@ -14,6 +14,8 @@ use slam_core::system::ClusterViews;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `noisefree run`.
+// The help texts name placeholders like <sequence>, which rustdoc would read as HTML tags.
+#[allow(rustdoc::invalid_html_tags)]
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
     /// Catalogued sequence (datasets.toml): a TUM / EuRoC name such as `fr2_coke` or `mh04`, or

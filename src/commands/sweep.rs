@@ -22,6 +22,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Arguments of `noisefree sweep`.
+// The help texts name placeholders like <out>, which rustdoc would read as HTML tags.
+#[allow(rustdoc::invalid_html_tags)]
 #[derive(clap::Args, Debug)]
 pub struct SweepArgs {
     /// Catalogued sequences or synthetic presets, comma-separated or repeated (`fr3_w_rpy,walking`).

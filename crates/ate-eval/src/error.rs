@@ -1,5 +1,6 @@
-//! Errors of trajectory reading and evaluation. Every error about a file names the file and,
-//! where it applies, the 1-based line, so that a user can fix the input at once.
+//! Errors of trajectory reading and evaluation, and the warnings of a reader that repaired its
+//! input. Every error or warning about a file names the file and, where it applies, the
+//! 1-based line, so that a user can fix the input at once.
 
 use std::path::PathBuf;
 
@@ -25,7 +26,7 @@ pub enum Error {
         message: String,
     },
     /// Timestamps do not strictly increase down the file, and the reader was asked to refuse
-    /// that ([`crate::StampPolicy::Strict`]).
+    /// that (`StampPolicy::Strict` of the `stamps` module).
     #[error("{path}:{line}: timestamp {stamp} is not after the previous one ({previous}); with --strict, trajectories must be sorted by time without duplicates")]
     Unsorted {
         /// The file.
@@ -68,3 +69,24 @@ pub enum Error {
 
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// A note about an input that was accepted after a repair (e.g. a quaternion normalised, or
+/// repeated stamps resolved).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Warning {
+    /// The file.
+    pub path: PathBuf,
+    /// 1-based line number, when the note is about one line (not the whole file).
+    pub line: Option<usize>,
+    /// What was repaired.
+    pub message: String,
+}
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.line {
+            Some(line) => write!(f, "{}:{}: {}", self.path.display(), line, self.message),
+            None => write!(f, "{}: {}", self.path.display(), self.message),
+        }
+    }
+}

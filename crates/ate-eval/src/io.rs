@@ -10,7 +10,7 @@
 //! file, or refused under [`StampPolicy::Strict`] (see [`crate::stamps`]). Writers go through a temporary file and a rename, so a crash never leaves a file that
 //! looks complete.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Warning};
 use crate::stamps::{self, Row, StampPolicy};
 use crate::trajectory::Trajectory;
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion};
@@ -35,27 +35,6 @@ impl Format {
         match path.extension().and_then(|e| e.to_str()) {
             Some(e) if e.eq_ignore_ascii_case("csv") => Format::Euroc,
             _ => Format::Tum,
-        }
-    }
-}
-
-/// A note about an input that was accepted after a repair (e.g. a quaternion normalised, or
-/// repeated stamps resolved).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Warning {
-    /// The file.
-    pub path: PathBuf,
-    /// 1-based line number, when the note is about one line (not the whole file).
-    pub line: Option<usize>,
-    /// What was repaired.
-    pub message: String,
-}
-
-impl std::fmt::Display for Warning {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self.line {
-            Some(line) => write!(f, "{}:{}: {}", self.path.display(), line, self.message),
-            None => write!(f, "{}: {}", self.path.display(), self.message),
         }
     }
 }

@@ -13,8 +13,7 @@
 //!
 //! Whatever was repaired is summed up in one [`Warning`] per file.
 
-use crate::error::{Error, Result};
-use crate::io::Warning;
+use crate::error::{Error, Result, Warning};
 use crate::trajectory::Trajectory;
 use nalgebra::Isometry3;
 use std::path::Path;

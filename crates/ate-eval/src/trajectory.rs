@@ -4,7 +4,7 @@
 use nalgebra::{Isometry3, Point3, Vector3};
 
 /// A timed sequence of poses T_world_sensor. Stamps are seconds in non-decreasing order; they
-/// repeat only where a file was read keeping every line ([`crate::StampPolicy::KeepAll`]).
+/// repeat only where a file was read keeping every line (`StampPolicy::KeepAll` of the `stamps` module).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trajectory {
     /// Timestamps in seconds, non-decreasing.

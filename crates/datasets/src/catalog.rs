@@ -176,7 +176,7 @@ struct File {
 /// The parsed catalog.
 #[derive(Clone, Debug)]
 pub struct Catalog {
-    /// What each peer-system key means (e.g. `DVO` -> "DVO [19], Kerl et al. ...").
+    /// What each peer-system key means (e.g. `DVO` -> "DVO \[19\], Kerl et al. ...").
     pub peers: BTreeMap<String, String>,
     entries: Vec<Entry>,
 }

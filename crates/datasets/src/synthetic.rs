@@ -74,7 +74,7 @@ fn groundtruth(gen: &synth::Generator, rig: bool, n: usize) -> ate_eval::Traject
         ate_eval::Trajectory {
             stamps: (0..n).map(|i| gen.timestamp(i)).collect(),
             poses: (0..n)
-                .map(|i| synth::euroc::groundtruth_body(gen, i))
+                .map(|i| synth::output::euroc::groundtruth_body(gen, i))
                 .collect(),
         }
     } else {

@@ -134,7 +134,7 @@ fn tum_stream_stamps_round_trip() {
             let d = gt.poses[k].inverse() * gt_mem.poses[k];
             assert!(d.translation.vector.norm() < 1e-8 && d.rotation.angle() < 1e-8);
             // The motion-capture noise is on both: the pose is not the path's exact one.
-            let t = gt_mem.stamps[k] - synth::generator::T0_NS as f64 * 1e-9;
+            let t = gt_mem.stamps[k] - synth::motion::clock::T0_NS as f64 * 1e-9;
             let exact = gen.pose_at_time(t);
             assert!((gt_mem.poses[k].translation.vector - exact.translation.vector).norm() > 0.0);
         }
@@ -172,7 +172,7 @@ fn free_running(seed: u64) -> Generator {
 fn free_running_depth_pairs_as_the_reader_associates_them() {
     let n = 3000;
     let gen = free_running(0);
-    let read = |s: f64| synth::tum::stamp_name(s).parse::<f64>().unwrap();
+    let read = |s: f64| synth::motion::clock::stamp_name(s).parse::<f64>().unwrap();
     let rgb: Vec<f64> = (0..n).map(|i| read(gen.timestamp(i))).collect();
     let depth: Vec<f64> = (0..n).map(|i| read(gen.depth_timestamp(i))).collect();
     let pairs = gen.stream_pairs(n);

@@ -92,7 +92,7 @@ pub struct Config {
     /// AVC (paper III-B) when set.
     pub avc: Option<AvcParams>,
     /// Rigid consensus (noisefree's own, beyond the paper; see
-    /// [`crate::techniques::rigid_consensus`]) when set.
+    /// [`crate::techniques::rigid_consensus`](mod@crate::techniques::rigid_consensus)) when set.
     pub rc: Option<RigidConsensusParams>,
     /// Emulated local-mapping latency, frames (0 = synchronous, the paper's protocol). With
     /// N > 0 each new keyframe is mapped (triangulation, fusion, culling, local BA) only after

@@ -3,7 +3,7 @@
 //! twin into it: `cargo run --release -p synth --example twins -- [DIR] [SEED] [TWINS]`
 //! (TWINS: comma-separated twin names to write sheets of; all when absent).
 
-use synth::twins::{config, frames, path, TWINS};
+use synth::catalog::twins::{config, frames, path, TWINS};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();

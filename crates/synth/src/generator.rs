@@ -1,6 +1,9 @@
-//! The sequence generator: random access to frame `i` of (config, seed) — images, depth,
-//! timestamp and exact ground-truth pose — computed from scratch, so frames can be produced in
-//! any order and in parallel with identical bytes.
+//! The sequence generator: random access to frame `i` of (specification, seed) — images,
+//! depth, timestamp and exact ground-truth pose — computed from scratch, so frames can be
+//! produced in any order and in parallel with identical bytes. It builds the world and the
+//! camera path of the specification once, then per frame: ray-casts the view
+//! ([`crate::sensor::render`]), images it ([`crate::sensor::imaging`]), measures depth through
+//! the sensor model ([`crate::sensor::depth`]) and stamps it ([`crate::motion::clock`]).
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
@@ -8,33 +11,18 @@ use std::sync::{Arc, Mutex};
 use nalgebra::{Isometry3, Translation3};
 use slam_core::{Camera, DepthImage, FrameInput, GrayImage};
 
-use crate::config::{SceneSpec, Supersampling, SynthConfig};
+use crate::error::SynthError;
 use crate::hash::{NoiseKey, Stream};
-use crate::imaging::ExposureSettings;
-use crate::layout::SightLine;
-use crate::noise::{
-    exposed_gray8, exposed_rgb8, noisy_gray8, noisy_rgb8, rgb_to_gray, sensor_depth, Photometry,
+use crate::motion::clock::Clock;
+use crate::motion::trajectory::pose_at;
+use crate::sensor::depth::sensor_depth;
+use crate::sensor::imaging::{
+    exposed_gray8, exposed_rgb8, noisy_gray8, noisy_rgb8, rgb_to_gray, ExposureSettings, Photometry,
 };
-use crate::render::{Exposed, Shading, View};
-use crate::scene::{Scene, MOVING_ID_BASE, OCCLUDER_ID};
-use crate::trajectory::pose_at;
-use crate::SynthError;
-
-/// Time stamp of frame 0 in nanoseconds since the epoch (an arbitrary date in 2014, like EuRoC's).
-pub const T0_NS: u64 = 1_403_636_580_000_000_000;
-
-/// `ns` rounded to the nearest multiple of `unit` nanoseconds (a stamp's resolution).
-fn round_to(ns: i128, unit: i128) -> u64 {
-    ((ns + unit / 2).div_euclid(unit) * unit) as u64
-}
-
-/// Nanoseconds since the epoch as seconds, exact to the microsecond.
-fn seconds(ns: u64) -> f64 {
-    (ns / 1000) as f64 * 1e-6 + (ns % 1000) as f64 * 1e-9
-}
-
-/// The association window of TUM's associate.py, seconds.
-pub const ASSOCIATE_MAX_DIFFERENCE_S: f64 = 0.02;
+use crate::sensor::render::{Exposed, Shading, Supersampling, View};
+use crate::spec::SynthConfig;
+use crate::world::layout::{layout, SceneSpec, SightLine};
+use crate::world::scene::{Scene, MOVING_ID_BASE, OCCLUDER_ID};
 
 /// One generated frame.
 #[derive(Clone, Debug)]
@@ -117,8 +105,7 @@ fn build_scene(config: &SynthConfig, seed: u64) -> Scene {
             SightLine::new(pose.translation.vector, axis)
         })
         .collect();
-    let layout = crate::layout::layout(&config.scene, seed, &sight, people);
-    Scene::with_layout(seed, moving, &layout)
+    Scene::with_layout(seed, moving, &layout(&config.scene, seed, &sight, people))
 }
 
 /// Generates the frames of one (config, seed) sequence.
@@ -127,6 +114,8 @@ pub struct Generator {
     config: SynthConfig,
     seed: u64,
     scene: Arc<Scene>,
+    /// The clocks of the sequence (stamps, ground truth), from the configuration.
+    clock: Clock,
     /// Auto-exposure metering previews (grey radiance with vignetting) by frame, a pure
     /// function of (config, seed, frame) kept to avoid re-rendering the controller's history.
     metering: Arc<Mutex<BTreeMap<usize, Arc<Vec<f32>>>>>,
@@ -137,10 +126,20 @@ impl Generator {
     /// Use [`Generator::try_new`] for configurations coming from users.
     pub fn new(config: SynthConfig, seed: u64) -> Self {
         let scene = Arc::new(build_scene(&config, seed));
+        let clock = Clock {
+            fps: config.camera.fps,
+            rgbd: config.is_rgbd(),
+            seed,
+            stamps: config.stamps,
+            depth_lag_frames: config.depth_noise.lag.as_ref().map_or(0.0, |l| l.frames),
+            mocap_clock: config.mocap_clock,
+            mocap_noise: config.mocap_noise,
+        };
         Generator {
             config,
             seed,
             scene,
+            clock,
             metering: Arc::default(),
         }
     }
@@ -172,136 +171,45 @@ impl Generator {
         &self.scene
     }
 
-    /// Capture instant of frame `index` (its colour image) in nanoseconds since the epoch.
-    /// RGB-D instants are whole microseconds (TUM files carry 6 decimals).
-    fn capture_ns(&self, index: usize) -> u64 {
-        let dt = (index as f64 * 1e9 / self.config.camera.fps).round() as u64;
-        let ns = T0_NS + dt;
-        if self.config.is_rgbd() {
-            round_to(ns as i128, 1000)
-        } else {
-            ns
-        }
-    }
-
-    /// The arrival jitter of stream `item` (0 colour, 1 depth) of frame `index`, nanoseconds:
-    /// Gaussian with standard deviation `sd_s`, clipped at 4 sigma.
-    fn jitter_ns(&self, index: usize, item: u64, sd_s: f64) -> i128 {
-        let z = NoiseKey::new(self.seed, index, Stream::Stamps).normal(item);
-        (z.clamp(-4.0, 4.0) * sd_s * 1e9).round() as i128
-    }
-
-    /// Stamp of frame `index` (its colour image) in nanoseconds since the epoch: its capture
-    /// instant, plus the arrival jitter with [`crate::config::StreamStamps`]. RGB-D stamps are
-    /// whole microseconds.
+    /// Stamp of frame `index` (its colour image) in nanoseconds since the epoch
+    /// ([`Clock::stamp_ns`]).
     pub fn stamp_ns(&self, index: usize) -> u64 {
-        let ns = self.capture_ns(index);
-        match &self.config.stamps {
-            Some(s) => round_to(ns as i128 + self.jitter_ns(index, 0, s.rgb_jitter_s), 1000),
-            None => ns,
-        }
+        self.clock.stamp_ns(index)
     }
 
     /// Stamp of frame `index` in seconds since the epoch.
     pub fn timestamp(&self, index: usize) -> f64 {
-        seconds(self.stamp_ns(index))
+        self.clock.timestamp(index)
     }
 
-    /// Stamp of frame `index`'s depth image in nanoseconds since the epoch: with
-    /// [`crate::config::StreamStamps`] of a free-running depth stream its own capture instant
-    /// (a [`crate::DepthLag`] earlier than the colour's) plus its own arrival jitter, whole
-    /// microseconds; otherwise the colour stamp.
+    /// Stamp of frame `index`'s depth image in nanoseconds since the epoch
+    /// ([`Clock::depth_stamp_ns`]).
     pub fn depth_stamp_ns(&self, index: usize) -> u64 {
-        let Some(sd) = self.config.stamps.and_then(|s| s.depth_jitter_s) else {
-            return self.stamp_ns(index);
-        };
-        let lag_frames = self
-            .config
-            .depth_noise
-            .lag
-            .as_ref()
-            .map_or(0.0, |l| l.frames);
-        let lag_ns = (lag_frames / self.config.camera.fps * 1e9).round() as i128;
-        round_to(
-            self.capture_ns(index) as i128 - lag_ns + self.jitter_ns(index, 1, sd),
-            1000,
-        )
+        self.clock.depth_stamp_ns(index)
     }
 
     /// Stamp of frame `index`'s depth image in seconds since the epoch.
     pub fn depth_timestamp(&self, index: usize) -> f64 {
-        seconds(self.depth_stamp_ns(index))
+        self.clock.depth_timestamp(index)
     }
 
     /// Which depth image goes with which colour image among frames `0..n`, as (colour frame,
     /// depth frame) sorted by colour frame: the pairs TUM's associate.py finds in the written
-    /// `rgb.txt` and `depth.txt` (stamps closer than 20 ms, nearest first, each once). With a
-    /// free-running depth stream ([`crate::config::StreamStamps::depth_jitter_s`]) a colour
-    /// image whose jitter brings the next depth image nearer than its own gets that one, and
-    /// a colour image left without depth drops out, as on real fr1 / fr2 recordings;
-    /// otherwise every frame is paired with its own depth.
+    /// `rgb.txt` and `depth.txt` ([`Clock::stream_pairs`]).
     pub fn stream_pairs(&self, n: usize) -> Vec<(usize, usize)> {
-        if self.config.stamps.and_then(|s| s.depth_jitter_s).is_none() {
-            return (0..n).map(|i| (i, i)).collect();
-        }
-        // The stamps as the files carry them (6 decimals) and a reader parses them.
-        let read = |s: f64| crate::tum::stamp_name(s).parse::<f64>().unwrap_or(s);
-        let rgb: Vec<f64> = (0..n).map(|i| read(self.timestamp(i))).collect();
-        let depth: Vec<f64> = (0..n).map(|i| read(self.depth_timestamp(i))).collect();
-        ate_eval::associate(
-            &rgb,
-            &depth,
-            ASSOCIATE_MAX_DIFFERENCE_S,
-            0.0,
-            ate_eval::AssociationMode::Tum,
-        )
+        self.clock.stream_pairs(n)
     }
 
     /// Seconds since frame 0 of frame `index`'s capture instant (what is rendered).
     pub fn time(&self, index: usize) -> f64 {
-        (self.capture_ns(index) - T0_NS) as f64 * 1e-9
+        self.clock.time(index)
     }
 
     /// The ground truth of frames `0..n` as the motion-capture system records it: (stamp in
-    /// seconds since the epoch, camera-to-world pose with the motion-capture noise). Without a
-    /// [`crate::config::MocapClock`], one pose per frame at its capture instant; with one, a
-    /// pose every `1 / rate_hz` from a phase drawn from the seed, stamps rounded to 0.1 ms,
-    /// from the last sample at or before frame 0's capture instant to the first at or after
-    /// frame `n - 1`'s, so every frame has a sample within half a period (the noise drawn per
-    /// sample).
+    /// seconds since the epoch, camera-to-world pose with the motion-capture noise), on its own
+    /// clock if it has one ([`Clock::groundtruth`]).
     pub fn groundtruth(&self, n: usize) -> Vec<(f64, Isometry3<f64>)> {
-        let Some(clock) = &self.config.mocap_clock else {
-            return (0..n)
-                .map(|i| {
-                    let t = seconds(self.capture_ns(i));
-                    (t, self.measured_pose(&self.pose(i), i))
-                })
-                .collect();
-        };
-        if n == 0 {
-            return Vec::new();
-        }
-        const STAMP_NS: i128 = 100_000; // 0.1 ms, the resolution of TUM's ground-truth files
-        let period = 1e9 / clock.rate_hz;
-        let key = NoiseKey::new(self.seed, 0, Stream::Stamps);
-        let phase = key.uniform(2) * period;
-        // Instants in nanoseconds since T0, small enough for f64 to hold them exactly to the
-        // nanosecond (the epoch's 1.4e18 would not).
-        let since_t0 = |i: usize| (self.capture_ns(i) - T0_NS) as f64;
-        let k0 = ((since_t0(0) - phase) / period).floor() as i64;
-        let k1 = ((since_t0(n - 1) - phase) / period).ceil() as i64;
-        (k0..=k1)
-            .enumerate()
-            .map(|(sample, k)| {
-                let instant = T0_NS as i128 + (phase + k as f64 * period).round() as i128;
-                let ns = round_to(instant, STAMP_NS);
-                let t = (ns as i128 - T0_NS as i128) as f64 * 1e-9;
-                (
-                    seconds(ns),
-                    self.measured_pose(&self.pose_at_time(t), sample),
-                )
-            })
-            .collect()
+        self.clock.groundtruth(n, |t| self.pose_at_time(t))
     }
 
     /// Exact camera-to-world pose at `t` seconds since frame 0.
@@ -346,24 +254,10 @@ impl Generator {
         self.pose_at_time(self.time(index))
     }
 
-    /// `pose` (of frame `index`) as a motion-capture system reports it: with
-    /// [`crate::config::MocapNoise`], the position moved by a Gaussian error per world axis
-    /// and the orientation rotated by a Gaussian rotation vector (body axes), drawn from
-    /// (seed, frame); without, `pose` itself.
+    /// `pose` (of frame `index`) as a motion-capture system reports it
+    /// ([`Clock::measured_pose`]).
     pub fn measured_pose(&self, pose: &Isometry3<f64>, index: usize) -> Isometry3<f64> {
-        let Some(m) = &self.config.mocap_noise else {
-            return *pose;
-        };
-        let key = NoiseKey::new(self.seed, index, Stream::Mocap);
-        let n = |k: u64| key.normal(k);
-        let dp = nalgebra::Vector3::new(n(0), n(1), n(2)) * m.position_m;
-        let dr = nalgebra::Vector3::new(n(3), n(4), n(5)) * m.angle_rad;
-        let rotation = if m.angle_rad > 0.0 {
-            pose.rotation * nalgebra::UnitQuaternion::from_scaled_axis(dr)
-        } else {
-            pose.rotation // a position-only tracker: orientation left exact
-        };
-        Isometry3::from_parts(Translation3::from(pose.translation.vector + dp), rotation)
+        self.clock.measured_pose(pose, index)
     }
 
     fn occluded(&self, index: usize) -> bool {

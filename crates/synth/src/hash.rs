@@ -2,8 +2,8 @@
 //!
 //! Frames must be generated in any order and in parallel with identical bytes, so image and
 //! depth noise never come from a sequential RNG: every draw is a pure function of
-//! (seed, frame, stream, pixel), mixed with the SplitMix64 finaliser. The scene itself (layout
-//! and textures) is drawn once from a seeded `rand_chacha` RNG, see [`crate::scene`].
+//! (seed, frame, stream, pixel), mixed with the SplitMix64 finaliser. The world itself (layout
+//! and textures) is drawn once from a seeded `rand_chacha` RNG (`world::scene`).
 
 /// Named noise streams, so that two noise components never reuse the same random numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -3,9 +3,9 @@
 //! synchronised depth stream with the colour's stamp), the motion-capture clock's samples on
 //! their own grid and phase, and neither touching the images.
 
-use synth::config::{MocapClock, StreamStamps};
-use synth::generator::T0_NS;
+use synth::motion::clock::T0_NS;
 use synth::{DepthLag, Generator, SynthConfig};
+use synth::{MocapClock, StreamStamps};
 
 const FPS: f64 = 30.0;
 

@@ -5,12 +5,12 @@
 
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use slam_core::Camera;
-use synth::config::Supersampling;
-use synth::imaging::{AutoExposure, Exposure, RollingShutter, SensorNoise, Vignetting};
-use synth::render::{Exposed, Shading, View};
-use synth::scene::{Scene, ROOM_HALF, ROOM_HEIGHT};
-use synth::texture::Texture;
-use synth::{Generator, SynthConfig};
+use synth::sensor::imaging::{AutoExposure, Exposure, RollingShutter, SensorNoise, Vignetting};
+use synth::sensor::render::{Exposed, Shading, View};
+use synth::world::layout::{ROOM_HALF, ROOM_HEIGHT};
+use synth::world::scene::Scene;
+use synth::world::texture::Texture;
+use synth::{Generator, Supersampling, SynthConfig};
 
 const DARK: u8 = 40;
 const BRIGHT: u8 = 220;
@@ -40,7 +40,7 @@ fn edge_room() -> Scene {
         textures,
         light: Vector3::new(0.0, 0.0, 2.6),
         people: Vec::new(),
-        room: synth::layout::RoomBox {
+        room: synth::world::layout::RoomBox {
             half: [ROOM_HALF; 2],
             height: ROOM_HEIGHT,
         },
@@ -137,7 +137,7 @@ fn rolling_shutter_rows_are_exposed_at_their_own_instants() {
     // turned by omega times that; the wall point x = 0 straight ahead at the stamp then lies at
     // u = cx - fx tan(angle) in that row (yaw to the left moves the scene to the right).
     for v in [20usize, 120, 240, 360, 460] {
-        let t = synth::imaging::row_time(v as f64, h, readout);
+        let t = synth::sensor::imaging::row_time(v as f64, h, readout);
         let expected = cam.cx + cam.fx * (OMEGA * t).tan() * sign_of_yaw(&cam);
         let got = crossing(&img, w, v, mid);
         assert!(
@@ -163,7 +163,7 @@ fn sign_of_yaw(cam: &Camera) -> f64 {
 fn undistorting_the_written_image_recovers_the_pinhole_rendering() {
     let scene = Scene::new(3, None);
     let placed = scene.place(0.0);
-    let pose = synth::trajectory::pose_at(&synth::Trajectory::Xyz, 1.0);
+    let pose = synth::motion::trajectory::pose_at(&synth::Trajectory::Xyz, 1.0);
     let distorted_cam = Camera::tum_fr1();
     let pinhole_cam = Camera {
         distortion: None,

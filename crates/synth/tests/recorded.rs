@@ -7,8 +7,8 @@
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
-use synth::recorded::ROOM_MARGIN;
-use synth::scene::{ROOM_HALF, ROOM_HEIGHT};
+use synth::motion::recorded::ROOM_MARGIN;
+use synth::world::layout::{ROOM_HALF, ROOM_HEIGHT};
 use synth::{Generator, RecordedPath, SynthConfig, SynthError, Trajectory};
 
 fn fr2_desk() -> PathBuf {

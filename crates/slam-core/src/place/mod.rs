@@ -5,7 +5,7 @@
 //! - [`vocabulary`]: the tree, quantisation, DBoW2's text form and our binary form;
 //! - [`bow`]: BoW vectors, the L1 score, the direct index (`FeatureVector`);
 //! - [`database`]: the inverted index over keyframes and its candidate queries;
-//! - [`train`]: hierarchical k-majority training, seeded and parallel.
+//! - [`train`](mod@train): hierarchical k-majority training, seeded and parallel.
 //!
 //! Nothing here reads files: the CLI hands in the bytes of a vocabulary file.
 

@@ -7,7 +7,7 @@
 //!   points);
 //! - [`avc`]: the Adaptive Virtual Camera residual (III-B, Eq. 8-12), a 4-D
 //!   [`crate::optimize::CameraResidual`] for pose-only optimization and bundle adjustment;
-//! - [`rigid_consensus`]: noisefree's own gate beyond the paper, the largest set of matches
+//! - [`rigid_consensus`](mod@rigid_consensus): noisefree's own gate beyond the paper, the largest set of matches
 //!   one rigid camera motion explains (RANSAC over 3-D-3-D matches);
 //! - [`correlation`]: the error terms and Pearson correlations of Table II.
 //!

@@ -24,13 +24,18 @@ use slam_core::Camera;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use slam_core::{Distortion, SensorKind};
 
-use crate::config::{
-    DepthLag, DepthNoise, ImageConfig, MocapClock, MocapNoise, MovingObjects, Room, SceneSpec,
-    StereoRig, StreamStamps, SynthConfig, Trajectory,
+use crate::motion::clock::{MocapClock, MocapNoise, StreamStamps};
+use crate::motion::handheld::{HandHeldPath, MotionSpec, Orbit, Region, Tremor};
+use crate::motion::trajectory::Trajectory;
+use crate::sensor::depth::{DepthLag, DepthNoise, DEPTH_FACTOR};
+use crate::sensor::imaging::{
+    AutoExposure, Exposure, Imaging, RollingShutter, SensorNoise, Vignetting,
 };
-use crate::handheld::{HandHeldPath, MotionSpec, Orbit, Region, Tremor};
-use crate::imaging::{AutoExposure, Exposure, Imaging, RollingShutter, SensorNoise, Vignetting};
-use crate::people::Activity;
+use crate::sensor::render::ImageConfig;
+use crate::spec::{StereoRig, SynthConfig};
+use crate::world::layout::{Room, SceneSpec};
+use crate::world::people::Activity;
+use crate::world::scene::MovingObjects;
 
 /// The TUM camera a twin uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -403,7 +408,7 @@ pub fn twin(name: &str) -> Option<&'static TwinSpec> {
 }
 
 /// Hand shake of a hand-held Kinect at 4-9 Hz: the RMS that gives the real fr2_desk's
-/// frame-to-frame shake ([`crate::handheld::TUM_SHAKE`]: 1.05x the smooth speed, 1.7x the smooth angular speed
+/// frame-to-frame shake ([`crate::motion::handheld::TUM_SHAKE`]: 1.05x the smooth speed, 1.7x the smooth angular speed
 /// at 30 Hz) on its twin; the test `fr2_desk_shake_gives_the_tremor_of_all_twins` solves it
 /// again. The same hand shakes every twin (a shake proportional to each sequence's speed would
 /// give fr1_360 a degree of RMS tremor).
@@ -417,7 +422,7 @@ pub const TREMOR: Tremor = Tremor {
 /// and of the position controller's corrections. No measurement was possible here (the real
 /// frames in ../shared/data are of the MAV at rest before take-off), so these are assumptions
 /// stated as such: 0.3 mm and 0.05 degree RMS per axis, a third of the hand's (0.93 mm) in
-/// position and under half in angle (0.123 degree), at the same 4-9 Hz; no [`crate::handheld::Shake`]
+/// position and under half in angle (0.123 degree), at the same 4-9 Hz; no [`crate::motion::handheld::Shake`]
 /// solve (no real frame-to-frame ratio to reach).
 pub const MAV_VIBRATION: Tremor = Tremor {
     position_m: 0.0003,
@@ -425,7 +430,7 @@ pub const MAV_VIBRATION: Tremor = Tremor {
 };
 
 /// Where each twin's eye moves and what it looks at, in the synthetic room (table top at
-/// (0, 1, 0.75), see [`crate::scene`]).
+/// (0, 1, 0.75), see [`crate::world::layout`]).
 fn motion(t: &TwinSpec) -> MotionSpec {
     let base = |eye: Region, target: Region| MotionSpec {
         label: t.name.to_string(),
@@ -723,7 +728,7 @@ fn euroc_config(t: &TwinSpec) -> SynthConfig {
         image: ImageConfig::default(),
         imaging,
         depth_noise: DepthNoise::default(),
-        depth_units_per_metre: crate::noise::DEPTH_FACTOR,
+        depth_units_per_metre: DEPTH_FACTOR,
         moving_objects: None,
         occlusion: None,
         rig: Some(rig),
@@ -767,7 +772,7 @@ pub fn config(t: &TwinSpec) -> SynthConfig {
         depth_units_per_metre: if tum == TumCamera::Fr2 {
             FR2_DEPTH_UNITS_PER_METRE
         } else {
-            crate::noise::DEPTH_FACTOR
+            DEPTH_FACTOR
         },
         moving_objects: t.people.map(|activity| MovingObjects {
             count: 2,
@@ -807,8 +812,10 @@ pub fn frames(t: &TwinSpec) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::handheld::TUM_SHAKE;
-    use crate::scene::{furniture_clearance, ROOM_HALF, ROOM_HEIGHT};
+    use crate::generator::Generator;
+    use crate::motion::handheld::TUM_SHAKE;
+    use crate::sensor::imaging::row_time;
+    use crate::world::layout::{furniture_clearance, ROOM_HALF, ROOM_HEIGHT};
 
     #[test]
     fn fr2_desk_shake_gives_the_tremor_of_all_twins() {
@@ -939,9 +946,9 @@ mod tests {
             .as_ref()
             .map_or(0.0, |r| r.readout_s);
         for v in 0..480 {
-            assert_eq!(crate::imaging::row_time(v as f64, 480, readout), 0.0);
+            assert_eq!(row_time(v as f64, 480, readout), 0.0);
         }
-        let gen = crate::Generator::new(c, 3);
+        let gen = Generator::new(c, 3);
         let f = gen.frame(40);
         let r = f.right.as_ref().unwrap();
         assert_eq!((f.gray.width, f.gray.height), (752, 480));
@@ -962,7 +969,7 @@ mod tests {
         ] {
             let c = config(twin(name).unwrap());
             assert_eq!(c.mocap_noise, Some(noise));
-            let gen = crate::Generator::new(c.clone(), 11);
+            let gen = Generator::new(c.clone(), 11);
             let n = 3000;
             let (mut sp, mut sa) = (0.0, 0.0);
             for i in 0..n {
@@ -986,7 +993,7 @@ mod tests {
             // Switched off: the exact pose.
             let mut off = c;
             off.without("mocap_noise").unwrap();
-            let gen = crate::Generator::new(off, 11);
+            let gen = Generator::new(off, 11);
             for i in [0, 7, 500] {
                 assert_eq!(gen.measured_pose(&gen.pose(i), i), gen.pose(i));
             }
@@ -1036,7 +1043,7 @@ mod tests {
             }
         }
         // The colour stamps' interval spread is the one measured on real fr2_desk (2.2 ms).
-        let gen = crate::Generator::new(config(twin("twin_fr2_desk").unwrap()), 0);
+        let gen = Generator::new(config(twin("twin_fr2_desk").unwrap()), 0);
         let dt: Vec<f64> = (1..2980)
             .map(|i| (gen.stamp_ns(i) - gen.stamp_ns(i - 1)) as f64 * 1e-9)
             .collect();
@@ -1054,12 +1061,8 @@ mod tests {
         let mut pinhole = c.clone();
         pinhole.without("lens").unwrap();
         let cam = c.camera.clone();
-        let dd = crate::Generator::new(c, 2)
-            .frame(10)
-            .depth_true
-            .unwrap()
-            .data;
-        let dp = crate::Generator::new(pinhole, 2)
+        let dd = Generator::new(c, 2).frame(10).depth_true.unwrap().data;
+        let dp = Generator::new(pinhole, 2)
             .frame(10)
             .depth_true
             .unwrap()

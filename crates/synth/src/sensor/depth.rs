@@ -1,4 +1,5 @@
-//! The depth-sensor model (after Nguyen et al. 2012, the paper's ref [31]) and the image noise.
+//! The depth-sensor model (after Nguyen et al. 2012, the paper's ref \[31\]): its components,
+//! each its own switch ([`DepthNoise`]), and how they turn a true depth image into a measured one.
 //!
 //! For each output pixel, in this order: misregistration and lateral noise choose the source
 //! pixel whose true depth is measured; holes drop it (range, grazing incidence, boundaries);
@@ -9,11 +10,184 @@
 use rayon::prelude::*;
 use slam_core::Camera;
 
-use crate::config::DepthNoise;
 use crate::hash::{NoiseKey, Stream};
 
 /// TUM depth PNG scale: one unit is 1/5000 m.
 pub const DEPTH_FACTOR: f64 = 5000.0;
+
+/// Axial noise after Nguyen et al. 2012: sigma_z(z, theta) = a + b (z - z0)^2 metres, plus
+/// (when `grazing` is on) 0.0001 / sqrt(z) * theta^2 / (pi/2 - theta)^2 for incidence theta.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxialNoise {
+    /// Constant term `a`, metres (default 0.0012).
+    pub a: f64,
+    /// Quadratic coefficient `b`, 1/metre (default 0.0019).
+    pub b: f64,
+    /// Depth of the minimum, metres (default 0.4).
+    pub z0: f64,
+    /// Add Nguyen's grazing-angle term (default true).
+    pub grazing: bool,
+}
+
+impl Default for AxialNoise {
+    fn default() -> Self {
+        AxialNoise {
+            a: 0.0012,
+            b: 0.0019,
+            z0: 0.4,
+            grazing: true,
+        }
+    }
+}
+
+impl AxialNoise {
+    /// Standard deviation in metres at depth `z` (metres) and incidence angle `theta` (radians).
+    pub fn sigma(&self, z: f64, theta: f64) -> f64 {
+        let mut s = self.a + self.b * (z - self.z0).powi(2);
+        if self.grazing {
+            let t = theta.clamp(0.0, std::f64::consts::FRAC_PI_2 - 1e-3);
+            s += 0.0001 / z.max(1e-3).sqrt() * t * t / (std::f64::consts::FRAC_PI_2 - t).powi(2);
+        }
+        s
+    }
+}
+
+/// Disparity quantisation of a structured-light sensor: depth is measured as disparity
+/// d = bf / z rounded to 1/`subpixel` pixel, then converted back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisparityQuantisation {
+    /// Projector-camera baseline times focal length, metres * pixels (Kinect v1: 0.075 m * 580 px = 43.5).
+    pub bf: f64,
+    /// Disparity sub-pixel resolution, steps per pixel (Kinect v1: 8).
+    pub subpixel: f64,
+}
+
+impl Default for DisparityQuantisation {
+    fn default() -> Self {
+        DisparityQuantisation {
+            bf: 43.5,
+            subpixel: 8.0,
+        }
+    }
+}
+
+/// Lateral noise: a pixel's depth is taken from the neighbour at an offset of
+/// (round N(0, sigma), round N(0, sigma)) pixels, which mixes fore- and background at boundaries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LateralNoise {
+    /// Standard deviation of the offset, pixels (default 0.8).
+    pub sigma_px: f64,
+}
+
+impl Default for LateralNoise {
+    fn default() -> Self {
+        LateralNoise { sigma_px: 0.8 }
+    }
+}
+
+/// Where the sensor returns no depth (value 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Holes {
+    /// Minimum range, metres (default 0.4).
+    pub min_range: f64,
+    /// Maximum range where every pixel still has depth, metres (default 4.0).
+    pub max_range: f64,
+    /// The per-pixel cut-off is uniform in [max_range, max_range + max_range_spread] (default 1.0 m).
+    pub max_range_spread: f64,
+    /// Incidence angle beyond which no depth is returned, degrees (default 78).
+    pub max_incidence_deg: f64,
+    /// Probability of a hole at a depth-boundary pixel (default 0.35).
+    pub boundary_probability: f64,
+    /// A pixel is on a boundary when a 4-neighbour's depth differs by more than this fraction
+    /// of its own depth (default 0.05).
+    pub boundary_jump: f64,
+}
+
+impl Default for Holes {
+    fn default() -> Self {
+        Holes {
+            min_range: 0.4,
+            max_range: 4.0,
+            max_range_spread: 1.0,
+            max_incidence_deg: 78.0,
+            boundary_probability: 0.35,
+            boundary_jump: 0.05,
+        }
+    }
+}
+
+/// RGB-to-depth misregistration: the depth at RGB pixel (u, v) is the sensor's depth at
+/// (u + dx, v + dy) (nearest pixel).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Misregistration {
+    /// Horizontal shift, pixels (preset `boundary`: 4).
+    pub dx_px: f64,
+    /// Vertical shift, pixels (preset `boundary`: 1).
+    pub dy_px: f64,
+}
+
+/// Depth time lag (as fr2's depth / colour offset, or an unsynchronised sensor): the depth image
+/// is rendered from the camera pose and scene `frames` frames earlier, but stamped as the colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthLag {
+    /// Lag in frames, may be fractional (preset `lag`: 2).
+    pub frames: f64,
+}
+
+/// Systematic depth distortion of a miscalibrated sensor: z' = z (1 + scale_error +
+/// wobble_amplitude * (r / r_max)^2 * cos(2 pi r / wobble_period_px)), r = distance from the
+/// image centre in pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SystematicDistortion {
+    /// Relative depth scale error (preset `distorted`: 0.04, i.e. +4 %).
+    pub scale_error: f64,
+    /// Relative amplitude of the radial wobble at the image corner (preset: 0.015).
+    pub wobble_amplitude: f64,
+    /// Radial period of the wobble, pixels (preset: 180).
+    pub wobble_period_px: f64,
+}
+
+impl Default for SystematicDistortion {
+    fn default() -> Self {
+        SystematicDistortion {
+            scale_error: 0.04,
+            wobble_amplitude: 0.015,
+            wobble_period_px: 180.0,
+        }
+    }
+}
+
+/// The depth-sensor model (RGB-D only). `None` switches a component off.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DepthNoise {
+    /// Random axial noise.
+    pub axial: Option<AxialNoise>,
+    /// Disparity quantisation.
+    pub quantisation: Option<DisparityQuantisation>,
+    /// Lateral (neighbour-mixing) noise.
+    pub lateral: Option<LateralNoise>,
+    /// Missing depth.
+    pub holes: Option<Holes>,
+    /// RGB-depth misregistration.
+    pub misregistration: Option<Misregistration>,
+    /// Depth time lag.
+    pub lag: Option<DepthLag>,
+    /// Systematic (calibration) distortion.
+    pub distortion: Option<SystematicDistortion>,
+}
+
+impl DepthNoise {
+    /// The Kinect-like model: axial + quantisation + lateral + holes, all at their defaults.
+    pub fn kinect() -> Self {
+        DepthNoise {
+            axial: Some(AxialNoise::default()),
+            quantisation: Some(DisparityQuantisation::default()),
+            lateral: Some(LateralNoise::default()),
+            holes: Some(Holes::default()),
+            ..DepthNoise::default()
+        }
+    }
+}
 
 /// Rounds half away from zero to an integer (an inline conversion: `f64::round` is a libm call
 /// on baseline x86-64).
@@ -35,12 +209,6 @@ pub fn quantise_png(z: f64, units: f64) -> f32 {
         return 0.0;
     }
     (q / units) as f32
-}
-
-/// Rounds to the nearest grey level and clamps to 0..=255 (cheaper than `f64::round`).
-#[inline]
-fn grey_level(v: f64) -> u8 {
-    (v + 0.5).clamp(0.0, 255.0) as u8
 }
 
 /// Applies the sensor model to a true depth image (`depth`, `cos_incidence` of the pixel-centre
@@ -138,121 +306,9 @@ pub fn sensor_depth(
         .collect()
 }
 
-/// Adds Gaussian grey-level noise (sigma in grey levels) to linear colour and rounds to RGB8.
-pub fn noisy_rgb8(colour: &[[f32; 3]], sigma: f64, key: NoiseKey) -> Vec<u8> {
-    colour
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(i, c)| {
-            let (n0, n1) = key.normal2(2 * i as u64);
-            let n2 = key.normal(2 * i as u64 + 1);
-            let n = [n0, n1, n2];
-            (0..3).map(move |k| grey_level(c[k] as f64 + sigma * n[k]))
-        })
-        .collect()
-}
-
-/// The photometric chain of a real sensor, for [`exposed_rgb8`] and [`exposed_gray8`]: radiance
-/// times the exposure scale and the vignetting, plus shot and read noise (or the constant
-/// `sigma` when the sensor noise is off), rounded and clipped to 8 bits.
-pub struct Photometry<'a> {
-    /// Image size and principal point (for vignetting).
-    pub camera: &'a Camera,
-    /// Multiplier of the radiance (auto-exposure; 1 without).
-    pub scale: f64,
-    /// Analogue gain (amplifies the sensor noise).
-    pub gain: f64,
-    /// Vignetting, if on.
-    pub vignetting: Option<&'a crate::imaging::Vignetting>,
-    /// Shot and read noise, if on.
-    pub sensor: Option<&'a crate::imaging::SensorNoise>,
-    /// Constant grey-level sigma used when `sensor` is off.
-    pub sigma: f64,
-}
-
-impl Photometry<'_> {
-    /// The noise-free level of radiance `c` under vignetting `vig`, and its noise sigma.
-    #[inline]
-    fn level(&self, c: f64, vig: f64) -> (f64, f64) {
-        let level = c * self.scale * vig;
-        let sigma = match self.sensor {
-            Some(s) => s.sigma(level, self.gain),
-            None => self.sigma,
-        };
-        (level, sigma)
-    }
-
-    /// Relative illumination of pixel `i` (row-major).
-    #[inline]
-    fn vignetting_at(&self, i: usize) -> f64 {
-        match self.vignetting {
-            Some(v) => {
-                let w = self.camera.width as usize;
-                v.gain(self.camera, (i % w) as f64, (i / w) as f64)
-            }
-            None => 1.0,
-        }
-    }
-}
-
-/// [`noisy_rgb8`] through a real sensor's photometric chain ([`Photometry`]); the random
-/// numbers are drawn exactly as [`noisy_rgb8`] draws them.
-pub fn exposed_rgb8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec<u8> {
-    colour
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(i, c)| {
-            let (n0, n1) = key.normal2(2 * i as u64);
-            let n2 = key.normal(2 * i as u64 + 1);
-            let n = [n0, n1, n2];
-            let vig = ph.vignetting_at(i);
-            (0..3).map(move |k| {
-                let (level, sigma) = ph.level(c[k] as f64, vig);
-                grey_level(level + sigma * n[k])
-            })
-        })
-        .collect()
-}
-
-/// [`noisy_gray8`] through a real sensor's photometric chain ([`Photometry`]).
-pub fn exposed_gray8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec<u8> {
-    colour
-        .par_iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let l = 0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64;
-            let (level, sigma) = ph.level(l, ph.vignetting_at(i));
-            grey_level(level + sigma * key.normal(i as u64))
-        })
-        .collect()
-}
-
-/// Grey from RGB8 with OpenCV's `COLOR_RGB2GRAY` fixed-point weights (as the TUM readers
-/// convert the colour PNGs), so that memory and disk give the same grey image.
-pub fn rgb_to_gray(rgb: &[u8]) -> Vec<u8> {
-    rgb.par_chunks_exact(3)
-        .map(|p| {
-            ((p[0] as u32 * 4899 + p[1] as u32 * 9617 + p[2] as u32 * 1868 + 8192) >> 14) as u8
-        })
-        .collect()
-}
-
-/// Grey image with noise straight from linear colour (stereo: no RGB image is kept).
-pub fn noisy_gray8(colour: &[[f32; 3]], sigma: f64, key: NoiseKey) -> Vec<u8> {
-    colour
-        .par_iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let l = 0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64;
-            grey_level(l + sigma * key.normal(i as u64))
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{AxialNoise, DisparityQuantisation, Holes, LateralNoise};
 
     fn flat(z: f32) -> (Camera, Vec<f32>, Vec<f32>) {
         let cam = Camera::tum_fr3();
@@ -341,10 +397,13 @@ mod tests {
     }
 
     #[test]
-    fn gray_conversion_matches_opencv_weights() {
-        assert_eq!(
-            rgb_to_gray(&[255, 255, 255, 0, 0, 0, 255, 0, 0]),
-            vec![255, 0, 76]
-        );
+    fn axial_sigma_matches_nguyen() {
+        let a = AxialNoise {
+            grazing: false,
+            ..AxialNoise::default()
+        };
+        assert!((a.sigma(1.0, 0.0) - (0.0012 + 0.0019 * 0.36)).abs() < 1e-12);
+        let g = AxialNoise::default();
+        assert!(g.sigma(2.0, 1.3) > a.sigma(2.0, 1.3) + 0.001);
     }
 }

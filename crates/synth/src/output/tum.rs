@@ -14,14 +14,10 @@ use image::ExtendedColorType;
 use nalgebra::Isometry3;
 use rayon::prelude::*;
 
+use crate::error::SynthError;
 use crate::generator::Generator;
-use crate::write::{mkdir, png, text, Staging};
-use crate::SynthError;
-
-/// TUM file-name stamp: seconds with 6 decimals.
-pub fn stamp_name(timestamp: f64) -> String {
-    format!("{timestamp:.6}")
-}
+use crate::motion::clock::stamp_name;
+use crate::output::write::{mkdir, png, text, Staging};
 
 /// One TUM trajectory line `timestamp tx ty tz qx qy qz qw` (qw >= 0).
 pub fn pose_line(timestamp: f64, pose: &Isometry3<f64>) -> String {

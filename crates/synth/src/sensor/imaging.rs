@@ -1,18 +1,23 @@
 //! How a real colour camera turns the scene's radiance into an 8-bit image, beyond the ideal
 //! pinhole snapshot: light integrated over the exposure (motion blur), rows read out one after
 //! another (rolling shutter), lens vignetting, auto-exposure with gain steps, and shot plus
-//! read noise. Lens distortion is the camera's own `distortion` (see [`crate::render`]).
+//! read noise, to the grey levels of the written image ([`Photometry`], [`exposed_rgb8`]; or
+//! the constant grey-level noise of the older presets, [`noisy_rgb8`]). Lens distortion is the
+//! camera's own `distortion` (see `render`).
 //!
 //! Each effect is an `Option` of [`Imaging`]; with all of them `None` a frame is rendered
 //! exactly as before they existed (the older presets keep their bytes). The values the twins
-//! use, with their sources, are in [`crate::twins`].
+//! use, with their sources, are in `catalog::twins`.
 //!
 //! Conventions: a frame's stamp is the instant of the middle of the exposure of the middle
 //! row; row `v` (0 at the top) is exposed around `stamp + readout * ((v + 0.5) / height - 0.5)`.
 //! "Radiance" is the rendered colour at the nominal exposure, in grey levels; the auto-exposure
 //! scale multiplies it before noise and clipping.
 
+use rayon::prelude::*;
 use slam_core::Camera;
+
+use crate::hash::NoiseKey;
 
 /// The imaging effects of a colour camera; all `None` by default (an ideal snapshot).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -185,6 +190,123 @@ pub fn row_time(v: f64, height: usize, readout_s: f64) -> f64 {
     readout_s * ((v + 0.5) / height as f64 - 0.5)
 }
 
+/// Rounds to the nearest grey level and clamps to 0..=255 (cheaper than `f64::round`).
+#[inline]
+fn grey_level(v: f64) -> u8 {
+    (v + 0.5).clamp(0.0, 255.0) as u8
+}
+
+/// Adds Gaussian grey-level noise (sigma in grey levels) to linear colour and rounds to RGB8.
+pub fn noisy_rgb8(colour: &[[f32; 3]], sigma: f64, key: NoiseKey) -> Vec<u8> {
+    colour
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, c)| {
+            let (n0, n1) = key.normal2(2 * i as u64);
+            let n2 = key.normal(2 * i as u64 + 1);
+            let n = [n0, n1, n2];
+            (0..3).map(move |k| grey_level(c[k] as f64 + sigma * n[k]))
+        })
+        .collect()
+}
+
+/// The photometric chain of a real sensor, for [`exposed_rgb8`] and [`exposed_gray8`]: radiance
+/// times the exposure scale and the vignetting, plus shot and read noise (or the constant
+/// `sigma` when the sensor noise is off), rounded and clipped to 8 bits.
+pub struct Photometry<'a> {
+    /// Image size and principal point (for vignetting).
+    pub camera: &'a Camera,
+    /// Multiplier of the radiance (auto-exposure; 1 without).
+    pub scale: f64,
+    /// Analogue gain (amplifies the sensor noise).
+    pub gain: f64,
+    /// Vignetting, if on.
+    pub vignetting: Option<&'a Vignetting>,
+    /// Shot and read noise, if on.
+    pub sensor: Option<&'a SensorNoise>,
+    /// Constant grey-level sigma used when `sensor` is off.
+    pub sigma: f64,
+}
+
+impl Photometry<'_> {
+    /// The noise-free level of radiance `c` under vignetting `vig`, and its noise sigma.
+    #[inline]
+    fn level(&self, c: f64, vig: f64) -> (f64, f64) {
+        let level = c * self.scale * vig;
+        let sigma = match self.sensor {
+            Some(s) => s.sigma(level, self.gain),
+            None => self.sigma,
+        };
+        (level, sigma)
+    }
+
+    /// Relative illumination of pixel `i` (row-major).
+    #[inline]
+    fn vignetting_at(&self, i: usize) -> f64 {
+        match self.vignetting {
+            Some(v) => {
+                let w = self.camera.width as usize;
+                v.gain(self.camera, (i % w) as f64, (i / w) as f64)
+            }
+            None => 1.0,
+        }
+    }
+}
+
+/// [`noisy_rgb8`] through a real sensor's photometric chain ([`Photometry`]); the random
+/// numbers are drawn exactly as [`noisy_rgb8`] draws them.
+pub fn exposed_rgb8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec<u8> {
+    colour
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, c)| {
+            let (n0, n1) = key.normal2(2 * i as u64);
+            let n2 = key.normal(2 * i as u64 + 1);
+            let n = [n0, n1, n2];
+            let vig = ph.vignetting_at(i);
+            (0..3).map(move |k| {
+                let (level, sigma) = ph.level(c[k] as f64, vig);
+                grey_level(level + sigma * n[k])
+            })
+        })
+        .collect()
+}
+
+/// [`noisy_gray8`] through a real sensor's photometric chain ([`Photometry`]).
+pub fn exposed_gray8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec<u8> {
+    colour
+        .par_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let l = 0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64;
+            let (level, sigma) = ph.level(l, ph.vignetting_at(i));
+            grey_level(level + sigma * key.normal(i as u64))
+        })
+        .collect()
+}
+
+/// Grey from RGB8 with OpenCV's `COLOR_RGB2GRAY` fixed-point weights (as the TUM readers
+/// convert the colour PNGs), so that memory and disk give the same grey image.
+pub fn rgb_to_gray(rgb: &[u8]) -> Vec<u8> {
+    rgb.par_chunks_exact(3)
+        .map(|p| {
+            ((p[0] as u32 * 4899 + p[1] as u32 * 9617 + p[2] as u32 * 1868 + 8192) >> 14) as u8
+        })
+        .collect()
+}
+
+/// Grey image with noise straight from linear colour (stereo: no RGB image is kept).
+pub fn noisy_gray8(colour: &[[f32; 3]], sigma: f64, key: NoiseKey) -> Vec<u8> {
+    colour
+        .par_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let l = 0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64;
+            grey_level(l + sigma * key.normal(i as u64))
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -259,5 +381,13 @@ mod tests {
         }
         assert!(sx.abs() < 1e-12 && (sy / n as f64).abs() < 0.1);
         assert_eq!(row_time(239.5, 480, 0.03), 0.0);
+    }
+
+    #[test]
+    fn gray_conversion_matches_opencv_weights() {
+        assert_eq!(
+            rgb_to_gray(&[255, 255, 255, 0, 0, 0, 255, 0, 0]),
+            vec![255, 0, 76]
+        );
     }
 }

@@ -16,11 +16,41 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::config::{Room, SceneSpec};
-use crate::scene::{Shape, ROOM_HALF, ROOM_HEIGHT};
-use crate::texture::Style;
+use crate::world::people::CHAIRS;
+use crate::world::shape::Shape;
+use crate::world::texture::Style;
 
-/// The room's box: x in [-half[0], half[0]], y in [-half[1], half[1]], z in [0, height].
+/// Half extents of the fixed office along x and y, metres.
+pub const ROOM_HALF: f64 = 2.5;
+/// Height of the fixed office (ceiling), metres.
+pub const ROOM_HEIGHT: f64 = 2.7;
+
+/// The kind of room a sequence is rendered in ([`layout`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Room {
+    /// The 5 x 5 x 2.7 m office around a desk of every preset (larger with a seeded layout).
+    #[default]
+    Office,
+    /// A motion-capture room like EuRoC's Vicon room: about 8 x 8 x 4 m, its walls lined with
+    /// grey padded mats, a grey carpet with marker strips, a play mat and a checkerboard.
+    ViconRoom,
+    /// An industrial hall like EuRoC's machine hall: about 20 x 14 x 9 m of concrete with
+    /// machines, columns, shelves and crates.
+    MachineHall,
+}
+
+/// The room and how its furniture is placed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SceneSpec {
+    /// The room.
+    pub room: Room,
+    /// Furniture and clutter drawn from the sequence seed (room size, what stands where, what
+    /// lies on the desk), kept off the camera's lines of sight. Off: the office's fixed
+    /// furniture, or the other rooms' layout of seed 0.
+    pub seeded_layout: bool,
+}
+
+/// The room's box: x in `[-half[0], half[0]]`, y in `[-half[1], half[1]]`, z in `[0, height]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoomBox {
     /// Half extents along x and y, metres.
@@ -203,6 +233,23 @@ pub fn fixed_office_shapes() -> Vec<(Shape, [f64; 3], f64)> {
         .collect()
 }
 
+/// Signed distance (metres) from world point `q` to the nearest piece of the room's fixed
+/// furniture (negative inside one; walls, floor, ceiling and moving objects not counted): how
+/// close a camera placed at `q` would be to an object, used to place recorded paths.
+pub fn furniture_clearance(q: &Vector3<f64>) -> f64 {
+    static LAYOUT: std::sync::OnceLock<Vec<(Shape, [f64; 3], f64)>> = std::sync::OnceLock::new();
+    LAYOUT
+        .get_or_init(fixed_office_shapes)
+        .iter()
+        .map(|(shape, c, yaw)| {
+            let r = q - Vector3::new(c[0], c[1], c[2]);
+            let (co, si) = (yaw.cos(), yaw.sin());
+            let l = Vector3::new(co * r.x + si * r.y, -si * r.x + co * r.y, r.z);
+            shape.signed_distance(&l)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Radius of the footprint of a shape about its centre, metres.
 fn footprint(shape: &Shape) -> f64 {
     match *shape {
@@ -382,7 +429,7 @@ fn seeded_office(rng: &mut ChaCha8Rng, sight: &[SightLine], people: bool) -> Lay
         room,
     };
     if people {
-        for c in crate::people::CHAIRS.iter() {
+        for c in CHAIRS.iter() {
             place.taken.push((c.at[0], c.at[1], 0.8));
         }
     }

@@ -4,14 +4,14 @@
 //! pose in EuRoC's column layout.
 //!
 //! Two kinds of pair: a rectified pinhole pair (the `stereo` preset: zero distortion, cam1 the
-//! baseline along cam0's x), or a calibrated rig ([`crate::config::StereoRig`], the EuRoC
+//! baseline along cam0's x), or a calibrated rig ([`crate::spec::StereoRig`], the EuRoC
 //! twins): each camera's own intrinsics, distortion and T_BS, the images distorted and
 //! unrectified, so a reader rectifies them as it does real EuRoC data.
 //!
 //! The camera is not at the body origin: cam0 sits at [`body_from_cam0`] (a rotation of about
 //! 90 degrees about z plus a few centimetres, like EuRoC's) or at the rig's T_BS, so readers
 //! that forget the body-to-camera conversion get a visibly wrong trajectory. With
-//! [`crate::config::MocapNoise`] the written ground truth carries motion-capture noise
+//! [`crate::motion::clock::MocapNoise`] the written ground truth carries motion-capture noise
 //! ([`Generator::measured_pose`]).
 
 use std::fmt::Write as _;
@@ -23,9 +23,9 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use slam_core::Camera;
 
+use crate::error::SynthError;
 use crate::generator::Generator;
-use crate::write::{mkdir, png, text, Staging};
-use crate::SynthError;
+use crate::output::write::{mkdir, png, text, Staging};
 
 /// T_BS of cam0: pose of the left camera in the body (IMU) frame.
 pub fn body_from_cam0() -> Isometry3<f64> {

@@ -1,26 +1,22 @@
 //! The indoor scene: a textured room (floor, ceiling, four walls) with the furniture of a
-//! [`crate::layout::Layout`] standing in front of each other (so depth boundaries are common,
+//! [`crate::world::layout::Layout`] standing in front of each other (so depth boundaries are common,
 //! the paper's Fig. 2), and optional walking "people" (articulated bodies, or textured boxes /
 //! cylinders).
 //!
 //! World frame: x, y horizontal, z up, metres; the presets' office spans x, y in [-2.5, 2.5],
 //! z in [0, 2.7] with fixed furniture (so every trajectory sees textured content within sensor
-//! range); the twins' rooms are drawn from the seed ([`crate::layout`]). The textures are drawn
+//! range); the twins' rooms are drawn from the seed ([`crate::world::layout`]). The textures are drawn
 //! from a `ChaCha8Rng` seeded with the sequence seed.
 
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::config::{MovingObjects, SceneSpec};
-use crate::layout::{Layout, RoomBox};
-use crate::people::{part_shapes, PartPose, Person, CHAIRS};
-use crate::texture::{Style, Texture};
+use crate::world::layout::{layout, Layout, RoomBox, SceneSpec};
+use crate::world::people::{self, part_shapes, Activity, PartPose, Person, CHAIRS};
+use crate::world::shape::Shape;
+use crate::world::texture::{Style, Texture};
 
-/// Half extents of the room along x and y, metres.
-pub const ROOM_HALF: f64 = 2.5;
-/// Height of the room (ceiling), metres.
-pub const ROOM_HEIGHT: f64 = 2.7;
 /// Object id of the featureless occluder of the occlusion window.
 pub const OCCLUDER_ID: u16 = u16::MAX;
 /// Object ids of the chairs of scenes with people (static, after the fixed furniture).
@@ -28,21 +24,26 @@ pub const CHAIR_ID_BASE: u16 = 900;
 /// Object ids at or above this (and below [`OCCLUDER_ID`]) are moving objects.
 pub const MOVING_ID_BASE: u16 = 1000;
 
-/// The shape of an object, in its local frame (centred at the origin, z up).
-#[derive(Clone, Copy, Debug)]
-pub enum Shape {
-    /// Axis-aligned box with the given half extents (metres).
-    Cuboid {
-        /// Half extents x, y, z.
-        half: [f64; 3],
-    },
-    /// Vertical cylinder.
-    Cylinder {
-        /// Radius, metres.
-        radius: f64,
-        /// Half height, metres.
-        half_height: f64,
-    },
+/// Independently moving textured objects ("people", like fr3_walking).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovingObjects {
+    /// How many (1..=3; default 2).
+    pub count: usize,
+    /// Walking speed multiplier (default 1; 1 is about 0.4-0.6 m/s). Not used by bodies.
+    pub speed: f64,
+    /// Articulated people doing this instead of the textured blocks (count 1..=2), with the
+    /// desk's chairs (default `None`: blocks, as the `walking` preset has always had).
+    pub bodies: Option<Activity>,
+}
+
+impl Default for MovingObjects {
+    fn default() -> Self {
+        MovingObjects {
+            count: 2,
+            speed: 1.0,
+            bodies: None,
+        }
+    }
 }
 
 /// Back-and-forth walk of a moving object: centre(t) = centre + axis * amplitude *
@@ -76,7 +77,7 @@ pub struct Object {
     pub id: u16,
     /// Motion, for moving objects.
     pub walk: Option<Walk>,
-    /// A body part: (person, part) into `Scene::people` and [`crate::people::PARTS`].
+    /// A body part: (person, part) into `Scene::people` and [`crate::world::people::PARTS`].
     pub body: Option<(usize, usize)>,
 }
 
@@ -157,43 +158,11 @@ pub struct Scene {
     pub room: RoomBox,
 }
 
-impl Shape {
-    /// Radius of a sphere around the local origin containing the shape.
-    fn bound(&self) -> f64 {
-        match *self {
-            Shape::Cuboid { half } => {
-                (half[0] * half[0] + half[1] * half[1] + half[2] * half[2]).sqrt()
-            }
-            Shape::Cylinder {
-                radius,
-                half_height,
-            } => (radius * radius + half_height * half_height).sqrt(),
-        }
-    }
-
-    /// Metric size (width, height) of a texture that covers every face without stretching.
-    fn texture_size(&self) -> (f64, f64) {
-        match *self {
-            Shape::Cuboid { half } => {
-                let m = 2.0 * half[0].max(half[1]).max(half[2]);
-                (m.max(0.3), m.max(0.3))
-            }
-            Shape::Cylinder {
-                radius,
-                half_height,
-            } => (
-                std::f64::consts::TAU * radius,
-                (2.0 * half_height).max(2.0 * radius),
-            ),
-        }
-    }
-}
-
 /// Margin added to a body part's bounding sphere, metres (a foot moves up to ~4 m/s, 3 cm
 /// between the renderer's bound samples).
 const BODY_BOUND_MARGIN: f64 = 0.05;
 
-/// The desk's chairs ([`crate::people::CHAIRS`]): a seat block and a backrest each, only in
+/// The desk's chairs ([`CHAIRS`]): a seat block and a backrest each, only in
 /// scenes with people (the other scenes keep their layout).
 fn add_chairs(objects: &mut Vec<Object>, textures: &mut Vec<Texture>, rng: &mut ChaCha8Rng) {
     for (k, chair) in CHAIRS.iter().enumerate() {
@@ -229,54 +198,15 @@ fn add_chairs(objects: &mut Vec<Object>, textures: &mut Vec<Texture>, rng: &mut 
     }
 }
 
-/// Signed distance (metres) from a point in the object's local frame to a shape: negative
-/// inside.
-fn shape_sdf(shape: &Shape, l: &Vector3<f64>) -> f64 {
-    match *shape {
-        Shape::Cuboid { half } => {
-            let d = Vector3::new(
-                l.x.abs() - half[0],
-                l.y.abs() - half[1],
-                l.z.abs() - half[2],
-            );
-            let outside = Vector3::new(d.x.max(0.0), d.y.max(0.0), d.z.max(0.0)).norm();
-            outside + d.x.max(d.y).max(d.z).min(0.0)
-        }
-        Shape::Cylinder {
-            radius,
-            half_height,
-        } => {
-            let dr = (l.x * l.x + l.y * l.y).sqrt() - radius;
-            let dz = l.z.abs() - half_height;
-            let outside = (dr.max(0.0).powi(2) + dz.max(0.0).powi(2)).sqrt();
-            outside + dr.max(dz).min(0.0)
-        }
-    }
-}
-
-/// Signed distance (metres) from world point `q` to the nearest piece of the room's fixed
-/// furniture (negative inside one; walls, floor, ceiling and moving objects not counted): how
-/// close a camera placed at `q` would be to an object, used to place recorded paths.
-pub fn furniture_clearance(q: &Vector3<f64>) -> f64 {
-    static LAYOUT: std::sync::OnceLock<Vec<(Shape, [f64; 3], f64)>> = std::sync::OnceLock::new();
-    LAYOUT
-        .get_or_init(crate::layout::fixed_office_shapes)
-        .iter()
-        .map(|(shape, c, yaw)| {
-            let r = q - Vector3::new(c[0], c[1], c[2]);
-            let (co, si) = (yaw.cos(), yaw.sin());
-            let l = Vector3::new(co * r.x + si * r.y, -si * r.x + co * r.y, r.z);
-            shape_sdf(shape, &l)
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
 impl Scene {
     /// Builds the fixed office with textures drawn from `seed`, plus `moving` walking objects.
     pub fn new(seed: u64, moving: Option<&MovingObjects>) -> Scene {
         let people = moving.is_some_and(|m| m.bodies.is_some());
-        let layout = crate::layout::layout(&SceneSpec::default(), seed, &[], people);
-        Scene::with_layout(seed, moving, &layout)
+        Scene::with_layout(
+            seed,
+            moving,
+            &layout(&SceneSpec::default(), seed, &[], people),
+        )
     }
 
     /// Builds `layout`'s room and furniture with textures drawn from `seed`, plus `moving`
@@ -318,7 +248,7 @@ impl Scene {
         let mut people = Vec::new();
         if let Some(activity) = moving.and_then(|m| m.bodies) {
             let count = moving.map_or(0, |m| m.count);
-            people = crate::people::people(seed, count, activity);
+            people = people::people(seed, count, activity);
             add_chairs(&mut objects, &mut textures, &mut rng);
             let shapes = part_shapes();
             for p in 0..people.len() {
@@ -507,7 +437,7 @@ impl Scene {
             .min((self.room.height - q.z).abs());
         for p in placed {
             let l = p.world_to_local(&(q - p.centre));
-            let sdf = shape_sdf(&self.objects[p.object].shape, &l);
+            let sdf = self.objects[p.object].shape.signed_distance(&l);
             best = best.min(sdf.abs());
         }
         best
@@ -651,6 +581,7 @@ fn hit_cylinder(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::world::layout::furniture_clearance;
 
     #[test]
     fn ray_hits_lie_on_surfaces() {

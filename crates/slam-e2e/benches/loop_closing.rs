@@ -12,7 +12,7 @@
 //! several-minute TUM or EuRoC sequence (426 keyframes, 15k map points, 216k observations).
 //! Setup renders and tracks the 1650 frames (about seven minutes on two cores: local BA over so
 //! many keyframes is slow) and prints what the synchronous run measured per keyframe; the whole
-//! bench takes about ten minutes. Run with `cargo bench -p slam-core --bench loop_closing`.
+//! bench takes about ten minutes. Run with `cargo bench -p slam-e2e --bench loop_closing`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;

@@ -1,7 +1,7 @@
 //! The ray-caster: renders a view of the placed scene through the camera (pinhole, or with the
 //! camera's radial-tangential lens distortion written into the image) into a z-depth image,
 //! incidence angles, object ids and (optionally) a Lambertian-shaded, anti-aliased colour
-//! image; [`render_exposed`] renders colour sample by sample in time (motion blur, rolling
+//! image; [`Exposed::render`] renders colour sample by sample in time (motion blur, rolling
 //! shutter). Rows are rendered in parallel with rayon; the output is a pure function of the
 //! inputs, so it is bit-identical for any number of threads.
 
@@ -9,8 +9,40 @@ use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use slam_core::{Camera, Distortion};
 
-use crate::config::Supersampling;
-use crate::scene::{Placed, Scene, OCCLUDER_ID};
+use crate::world::scene::{Placed, Scene, OCCLUDER_ID};
+
+/// How many rays are averaged for a pixel's colour (depth always comes from the pixel centre).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Supersampling {
+    /// One ray through the pixel centre (aliased edges).
+    None,
+    /// Centre ray weighted 1/2 plus the four pixel corners weighted 1/8 each (corners shared
+    /// with the neighbours): about 2 rays per pixel. Default.
+    Quincunx,
+    /// An n x n grid of rays inside the pixel (n >= 2), plus the centre ray for depth.
+    Grid(u32),
+}
+
+/// Photometric settings of the rendered images.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageConfig {
+    /// Standard deviation of the additive Gaussian grey-level noise, in grey levels (default 2.0).
+    pub noise_sigma: f64,
+    /// Anti-aliasing (default [`Supersampling::Quincunx`]).
+    pub supersampling: Supersampling,
+    /// Ambient share of the Lambertian shading, 0..1 (default 0.45).
+    pub ambient: f64,
+}
+
+impl Default for ImageConfig {
+    fn default() -> Self {
+        ImageConfig {
+            noise_sigma: 2.0,
+            supersampling: Supersampling::Quincunx,
+            ambient: 0.45,
+        }
+    }
+}
 
 /// Depth of the featureless occluder of the occlusion window, metres.
 pub const OCCLUDER_DEPTH: f32 = 0.5;
@@ -492,11 +524,11 @@ pub struct Exposed<'a> {
 
 impl Exposed<'_> {
     /// Renders the colour image: each pixel averages `samples` rays, sample `k` of row `v` cast
-    /// at [`crate::imaging::sample_offset`] inside the pixel and at the instant
+    /// at [`crate::sensor::imaging::sample_offset`] inside the pixel and at the instant
     /// `time + row_time(v) + sample_time(k)`, with the camera and the objects where they are at
     /// that instant.
     pub fn render(&self) -> Vec<[f32; 3]> {
-        use crate::imaging::{row_time, sample_offset, sample_time};
+        use crate::sensor::imaging::{row_time, sample_offset, sample_time};
         let (w, h) = (self.camera.width as usize, self.camera.height as usize);
         let n = self.samples.max(1);
         let inv = 1.0 / n as f32;
@@ -591,7 +623,7 @@ fn union_bounds(p: &[f64; 4], q: &[f64; 4]) -> [f64; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::trajectory::pose_at;
+    use crate::motion::trajectory::{pose_at, Trajectory};
 
     /// The ray table's first-order step agrees with the exact inverse between pixel centres.
     #[test]
@@ -650,7 +682,7 @@ mod tests {
             scene: &scene,
             placed: &placed,
             camera: &cam,
-            pose_wc: pose_at(&crate::config::Trajectory::Xyz, 0.0),
+            pose_wc: pose_at(&Trajectory::Xyz, 0.0),
             occluded: false,
         };
         let render = |s| {

@@ -4,7 +4,7 @@
 //!
 //! The map: 1000 frames of a camera turning on the spot (1.7 turns), each made a keyframe with a
 //! map point for every keypoint with depth (placed with the true pose). Setup renders the frames
-//! (about a minute); run with `cargo bench -p slam-core --bench relocalization`.
+//! (about a minute); run with `cargo bench -p slam-e2e --bench relocalization`.
 
 use std::sync::Arc;
 

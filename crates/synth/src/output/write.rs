@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
 
-use crate::SynthError;
+use crate::error::SynthError;
 
 /// Wraps an I/O error with its path.
 pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError + '_ {

@@ -2,7 +2,7 @@
 //! RGB-D sequence (`kinect` preset, rendered once up front), with the time split per stage
 //! (features / tracking / local mapping / BA) printed from the per-frame statistics.
 //!
-//! Run: `cargo bench -p slam-core --bench system`.
+//! Run: `cargo bench -p slam-e2e --bench system`.
 
 use std::time::Instant;
 

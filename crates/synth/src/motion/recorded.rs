@@ -14,7 +14,7 @@
 //! 2. *Heading*: the yaw about the vertical (in [`YAW_STEP_DEG`] steps) is chosen among those
 //!    whose bounding box fits the square room with [`ROOM_MARGIN`] to the walls, as the one
 //!    that keeps the camera farthest from the room's furniture
-//!    ([`crate::scene::furniture_clearance`]).
+//!    ([`crate::world::layout::furniture_clearance`]).
 //! 3. *Place*: a translation puts the centre of the path's bounding box at the room's centre
 //!    in x, y and at [`TARGET_HEIGHT`] in z (shifted within the room if the height range needs
 //!    it). Every camera position lies at least [`ROOM_MARGIN`] from the walls, floor and
@@ -31,8 +31,8 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
-use crate::scene::{furniture_clearance, ROOM_HALF, ROOM_HEIGHT};
-use crate::SynthError;
+use crate::error::SynthError;
+use crate::world::layout::{furniture_clearance, ROOM_HALF, ROOM_HEIGHT};
 
 /// Height of the centre of a recorded path's bounding box after the fit, metres (hand-held).
 pub const TARGET_HEIGHT: f64 = 1.3;
@@ -346,8 +346,8 @@ impl RecordedPath {
 
     /// Camera-to-room pose at `t` seconds since the first stamp: the fitted pose of a stamp
     /// exactly at a stamp, else interpolated between the two bracketing stamps. Outside the
-    /// recording `t` is clamped to it (callers check the duration first, see
-    /// [`crate::Generator::check_frames`]).
+    /// recording `t` is clamped to it (callers check the duration first: the generator's
+    /// `check_frames`).
     pub fn pose_at(&self, t: f64) -> Isometry3<f64> {
         let last = self.poses.len() - 1;
         if t.is_nan() || t <= 0.0 {

@@ -22,7 +22,7 @@ use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::trajectory::look_at;
+use crate::motion::smooth::look_at;
 
 /// An axis-aligned box of the room (world frame, metres).
 #[derive(Clone, Copy, Debug, PartialEq)]

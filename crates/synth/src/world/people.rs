@@ -24,7 +24,7 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::scene::Shape;
+use crate::world::shape::Shape;
 
 /// What the people of a scene do.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

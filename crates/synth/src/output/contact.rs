@@ -6,9 +6,9 @@ use std::path::Path;
 
 use image::{Rgb, RgbImage};
 
+use crate::error::SynthError;
 use crate::generator::{Generator, SynthFrame};
-use crate::write::io_err;
-use crate::SynthError;
+use crate::output::write::io_err;
 
 const GAP: u32 = 4;
 

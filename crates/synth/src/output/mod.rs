@@ -1,0 +1,11 @@
+//! Where generated frames go besides memory: dataset folders other programs read, and pictures.
+//!
+//! - [`tum`]: the TUM RGB-D layout (RGB-D sequences);
+//! - [`euroc`]: the EuRoC ASL layout (stereo sequences);
+//! - [`contact`]: a contact sheet (colour | depth | depth error) of a few frames;
+//! - `write` (private): the staging folder, text and PNG files they share.
+
+pub mod contact;
+pub mod euroc;
+pub mod tum;
+mod write;
