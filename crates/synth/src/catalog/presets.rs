@@ -1,5 +1,6 @@
 //! The named presets, each named after the effect it models (`clean`, `kinect`, `boundary`,
-//! `walking`, `stereo`, `distorted`, `lag`, `hard`, `occluded`, `loop`), and the twins of the
+//! `walking`, `stereo`, `distorted`, `lag`, `hard`, `occluded`, `loop`, `walking-stereo`), and
+//! the twins of the
 //! paper's sequences ([`crate::catalog::twins`]): a name becomes a [`SynthConfig`].
 
 use slam_core::{Camera, SensorKind};
@@ -60,12 +61,15 @@ pub enum Preset {
     /// `distorted` depth error, stronger. Its default length is the circuit plus the revisit
     /// ([`Preset::default_frames`]).
     Loop,
+    /// The `stereo` pair with `walking`'s two people crossing the view: a moving scene for
+    /// stereo depth (the rigid consensus's stereo path).
+    WalkingStereo,
     /// A twin of one of the paper's sequences (TUM or EuRoC): index into
     /// [`TWINS`].
     Twin(usize),
 }
 
-const PRESETS: [(Preset, &str); 10] = [
+const PRESETS: [(Preset, &str); 11] = [
     (Preset::Clean, "clean"),
     (Preset::Kinect, "kinect"),
     (Preset::Boundary, "boundary"),
@@ -76,6 +80,7 @@ const PRESETS: [(Preset, &str); 10] = [
     (Preset::Hard, "hard"),
     (Preset::Occluded, "occluded"),
     (Preset::Loop, "loop"),
+    (Preset::WalkingStereo, "walking-stereo"),
 ];
 
 /// Names of all presets: the effect presets easy to hard, then the twins.
@@ -154,6 +159,11 @@ impl Preset {
             },
             Preset::Stereo => SynthConfig {
                 camera: stereo_camera(),
+                ..SynthConfig::default()
+            },
+            Preset::WalkingStereo => SynthConfig {
+                camera: stereo_camera(),
+                moving_objects: Some(MovingObjects::default()),
                 ..SynthConfig::default()
             },
             Preset::Distorted => {
