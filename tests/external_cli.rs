@@ -65,7 +65,7 @@ fn noisefree_as_an_external_system_scores_bit_for_bit_as_the_internal_orb() {
     let out = dir.join("sweep");
     let cfg_s = cfg.to_str().unwrap();
     let out_s = out.to_str().unwrap();
-    noisefree_ok(&[
+    let sweep = [
         "sweep",
         "--seq",
         "kinect,stereo",
@@ -80,7 +80,8 @@ fn noisefree_as_an_external_system_scores_bit_for_bit_as_the_internal_orb() {
         "--out",
         out_s,
         "--quiet",
-    ]);
+    ];
+    noisefree_ok(&sweep);
     let recs = records(&out);
     for seq in ["kinect", "stereo"] {
         let ours = &recs[&(seq.into(), "orb".into(), "0".into())];
@@ -131,22 +132,7 @@ fn noisefree_as_an_external_system_scores_bit_for_bit_as_the_internal_orb() {
         "ns stamps, one a line"
     );
     // A resumed sweep runs nothing again.
-    noisefree_ok(&[
-        "sweep",
-        "--seq",
-        "kinect,stereo",
-        "--frames",
-        "40",
-        "--runs",
-        "1",
-        "--configs",
-        "orb,self",
-        "--config",
-        cfg_s,
-        "--out",
-        out_s,
-        "--quiet",
-    ]);
+    noisefree_ok(&sweep);
     assert_eq!(records(&out).len(), 4);
     // The table puts the system's label beside ours.
     let t = noisefree_ok(&["table", out_s, "--print"]);

@@ -159,19 +159,25 @@ pub fn relative_pose(left: &RawCamera, right: &RawCamera) -> Isometry3<f64> {
     right.t_bs.inverse() * left.t_bs
 }
 
+/// A stereo pair's two cameras must have one image size (`what`: the file that says so).
+fn same_size(left: &RawCamera, right: &RawCamera, what: &str) -> Result<(), DatasetError> {
+    if (left.width, left.height) != (right.width, right.height) {
+        return Err(DatasetError::invalid(
+            what,
+            format!(
+                "left and right cameras differ in size ({}x{} vs {}x{})",
+                left.width, left.height, right.width, right.height
+            ),
+        ));
+    }
+    Ok(())
+}
+
 impl StereoRectification {
     /// Computes the rectification of a horizontal stereo pair from its two calibrations.
     /// Fails when the cameras differ in size or the baseline is degenerate.
     pub fn new(left: &RawCamera, right: &RawCamera) -> Result<Self, DatasetError> {
-        if (left.width, left.height) != (right.width, right.height) {
-            return Err(DatasetError::invalid(
-                "sensor.yaml",
-                format!(
-                    "left and right cameras differ in size ({}x{} vs {}x{})",
-                    left.width, left.height, right.width, right.height
-                ),
-            ));
-        }
+        same_size(left, right, "sensor.yaml")?;
         let rel = relative_pose(left, right);
         let r = rel.rotation.to_rotation_matrix();
         let t_vec = rel.translation.vector;
@@ -301,15 +307,7 @@ impl StereoRectification {
         principal_point: Vector2<f64>,
         baseline: f64,
     ) -> Result<Self, DatasetError> {
-        if (left.width, left.height) != (right.width, right.height) {
-            return Err(DatasetError::invalid(
-                "settings",
-                format!(
-                    "left and right cameras differ in size ({}x{} vs {}x{})",
-                    left.width, left.height, right.width, right.height
-                ),
-            ));
-        }
+        same_size(left, right, "settings")?;
         let t_b_left = left.t_bs
             * Isometry3::from_parts(
                 Translation3::identity(),
