@@ -149,7 +149,7 @@ pub fn prepare(
     };
     match seq.format {
         Format::TumRgbd => {
-            let pairs = tum_pairs(&folder)?;
+            let pairs = datasets::tum::pairs(&folder, datasets::tum::MAX_DIFFERENCE)?;
             if pairs.len() < frames {
                 bail!(
                     "{}: {} rgb/depth pairs, fewer than the run's {frames} frames",
@@ -208,23 +208,6 @@ pub fn prepare(
     }
     out.write_settings_files()?;
     Ok(out)
-}
-
-/// The colour-depth pairs of a TUM folder as the reader pairs them.
-fn tum_pairs(folder: &Path) -> Result<Vec<(datasets::tum::ListEntry, datasets::tum::ListEntry)>> {
-    use datasets::tum::{associate, read_associations, read_list, MAX_DIFFERENCE};
-    let assoc = folder.join("associations.txt");
-    if assoc.is_file() {
-        return Ok(read_associations(&assoc)?);
-    }
-    let rgb = read_list(&folder.join("rgb.txt"))?;
-    let depth = read_list(&folder.join("depth.txt"))?;
-    let ta: Vec<f64> = rgb.iter().map(|e| e.stamp).collect();
-    let tb: Vec<f64> = depth.iter().map(|e| e.stamp).collect();
-    Ok(associate(&ta, &tb, MAX_DIFFERENCE)
-        .into_iter()
-        .map(|(i, j)| (rgb[i].clone(), depth[j].clone()))
-        .collect())
 }
 
 /// Renders a synthetic preset into `folder` (TUM layout for RGB-D, EuRoC ASL for stereo).

@@ -258,39 +258,7 @@ impl StereoRectification {
             ));
         }
         let focal = fc * s;
-
-        let t_b_left = left.t_bs
-            * Isometry3::from_parts(
-                Translation3::identity(),
-                UnitQuaternion::from_rotation_matrix(&r_left.inverse()),
-            );
-        let mut rect = StereoRectification {
-            r_left,
-            r_right,
-            focal,
-            principal_point: c,
-            baseline,
-            width: left.width,
-            height: left.height,
-            t_b_left,
-            left: left.clone(),
-            right: right.clone(),
-            map_left: RemapMap {
-                width: 0,
-                height: 0,
-                map_x: vec![],
-                map_y: vec![],
-            },
-            map_right: RemapMap {
-                width: 0,
-                height: 0,
-                map_x: vec![],
-                map_y: vec![],
-            },
-        };
-        rect.map_left = rect.build_map(false);
-        rect.map_right = rect.build_map(true);
-        Ok(rect)
+        StereoRectification::from_parts(left, right, r_left, r_right, focal, c, baseline)
     }
 
     /// A rectification given rather than computed: the rotations, shared intrinsics and

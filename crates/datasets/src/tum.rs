@@ -162,6 +162,23 @@ pub(crate) fn folder_name(dir: &Path) -> String {
         .unwrap_or_else(|| dir.display().to_string())
 }
 
+/// The colour-depth pairs of a TUM folder, in colour order: its `associations.txt` when it has
+/// one, else `rgb.txt` and `depth.txt` associated as associate.py does within `max_difference`.
+pub fn pairs(dir: &Path, max_difference: f64) -> Result<Vec<(ListEntry, ListEntry)>, DatasetError> {
+    let assoc_path = dir.join("associations.txt");
+    if assoc_path.is_file() {
+        return read_associations(&assoc_path);
+    }
+    let rgb = read_list(&dir.join("rgb.txt"))?;
+    let depth = read_list(&dir.join("depth.txt"))?;
+    let ta: Vec<f64> = rgb.iter().map(|e| e.stamp).collect();
+    let tb: Vec<f64> = depth.iter().map(|e| e.stamp).collect();
+    Ok(associate(&ta, &tb, max_difference)
+        .into_iter()
+        .map(|(i, j)| (rgb[i].clone(), depth[j].clone()))
+        .collect())
+}
+
 /// Loads a TUM RGB-D folder with explicit options.
 pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetError> {
     let (mut seq, frames) = open_tum_with(dir, opts)?;
@@ -198,19 +215,7 @@ pub fn open_tum_with(
     }
     let max_dt = opts.max_difference.unwrap_or(MAX_DIFFERENCE);
 
-    let assoc_path = dir.join("associations.txt");
-    let mut pairs: Vec<(ListEntry, ListEntry)> = if assoc_path.is_file() {
-        read_associations(&assoc_path)?
-    } else {
-        let rgb = read_list(&dir.join("rgb.txt"))?;
-        let depth = read_list(&dir.join("depth.txt"))?;
-        let ta: Vec<f64> = rgb.iter().map(|e| e.stamp).collect();
-        let tb: Vec<f64> = depth.iter().map(|e| e.stamp).collect();
-        associate(&ta, &tb, max_dt)
-            .into_iter()
-            .map(|(i, j)| (rgb[i].clone(), depth[j].clone()))
-            .collect()
-    };
+    let mut pairs = pairs(dir, max_dt)?;
     if let Some(n) = opts.max_frames {
         pairs.truncate(n);
     }
