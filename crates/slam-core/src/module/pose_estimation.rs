@@ -28,7 +28,9 @@ use crate::camera::Camera;
 use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
 use crate::optimize::{pose_optimization_with, Measurement, PoseObservation, PoseOptConfig};
-use crate::techniques::rigid_consensus::{rigid_consensus, ConsensusMatch, RigidConsensusParams};
+use crate::techniques::rigid_consensus::{
+    nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
+};
 use crate::techniques::{
     mcor_gate, ClusterFeature, McorCluster, McorMatch, McorOutcome, McorVerdict,
     VirtualCameraResidual,
@@ -379,13 +381,13 @@ pub fn optimize_frame_pose(
             ..PoseOptCounts::default()
         };
     }
-    // Rigid consensus (beyond the paper): the matches one rigid camera motion explains, found
-    // around the initial pose; the rest stay out of every round, and the optimization starts
-    // from the consensus pose.
-    let mut initial = initial;
-    let rc_outlier: Option<Vec<bool>> = hooks.rc.and_then(|params| {
+    // Rigid consensus (beyond the paper): the matches one rigid camera motion explains. Its
+    // hypotheses must beat the pose the optimizer solves from the motion prior (and the prior
+    // itself); when one does, the optimization runs again from the consensus pose with the
+    // matches outside the consensus kept out of its first rounds.
+    let rc_matches: Option<Vec<ConsensusMatch>> = hooks.rc.map(|_| {
         frame.dynamic.clear();
-        let matches: Vec<ConsensusMatch> = index
+        index
             .iter()
             .zip(&obs)
             .map(|(&i, o)| {
@@ -403,13 +405,10 @@ pub fn optimize_frame_pose(
                     ),
                     inv_sigma2: o.inv_sigma2,
                     keyframes: m.map_or(0, |m| m.observations.len() as u32),
+                    frames_found: m.map_or(0, |m| m.n_found),
                 }
             })
-            .collect();
-        let key = frame.id.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ obs.len() as u64;
-        let c = rigid_consensus(camera, params, &initial, &matches, key)?;
-        initial = c.tcw;
-        Some(c.inlier.iter().map(|&i| !i).collect())
+            .collect()
     });
     // MC-OR clusters (keyframe poses are fixed during this call) and the current features.
     let clusters: Vec<McorCluster> = match hooks.mcor {
@@ -429,51 +428,79 @@ pub fn optimize_frame_pose(
     let mut last_gate = (0, 0);
     let mut last_verdicts: Option<Vec<McorVerdict>> = None;
     let tapped = tap_active();
-    // Hook point 2, before every round with the latest pose: re-aim the virtual cameras, then
-    // re-run MC-OR (an observation rejected at a poor early pose may come back).
     let rc_veto_rounds = hooks.rc.map_or(0, |p| p.veto_rounds);
-    let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
-        for (k, r) in &avc {
-            r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
+    // One pose optimization from `start`; `veto` (one per match) keeps matches out of the
+    // first `veto_rounds` rounds.
+    let mut optimize = |start: &Isometry3<f64>, veto: Option<&[bool]>| {
+        // Hook point 2, before every round with the latest pose: re-aim the virtual cameras,
+        // then re-run MC-OR (an observation rejected at a poor early pose may come back).
+        let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
+            for (k, r) in &avc {
+                r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
+            }
+            if let Some(out) = veto {
+                if round < rc_veto_rounds {
+                    excluded.copy_from_slice(out);
+                } else {
+                    excluded.fill(false);
+                }
+            }
+            if let Some(params) = hooks.mcor {
+                let matches: Vec<McorMatch> = clusters
+                    .iter()
+                    .zip(&obs)
+                    .zip(&current)
+                    .map(|((c, o), p)| McorMatch {
+                        cluster: c,
+                        map_point: o.point_world,
+                        point_camera: *p,
+                    })
+                    .collect();
+                let outcome = mcor_gate(params, &pose.inverse(), &matches);
+                for (k, e) in excluded.iter_mut().enumerate() {
+                    *e = !outcome.kept(k);
+                }
+                last_gate = (outcome.n_rejected_clusters, outcome.n_rejected_features);
+                if tapped {
+                    last_verdicts = Some(outcome.verdicts);
+                }
+            }
+        };
+        pose_optimization_with(camera, start, &obs, cfg, &mut gate)
+    };
+    let consensus = match (hooks.rc, &rc_matches) {
+        (Some(params), Some(matches)) => {
+            let key = frame.id.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ obs.len() as u64;
+            rigid_consensus(camera, params, &initial, matches, key).map(|c| (params, matches, c))
         }
-        if let Some(out) = &rc_outlier {
-            if round < rc_veto_rounds {
-                excluded.copy_from_slice(out);
-            } else {
-                excluded.fill(false);
+        _ => None,
+    };
+    let result = match consensus {
+        None => optimize(&initial, None),
+        Some((params, matches, c)) => {
+            let outside: Vec<bool> = c.inlier.iter().map(|&i| !i).collect();
+            let mut result = optimize(&c.tcw, Some(&outside));
+            if !c.prior_won {
+                // A drawn hypothesis beat the prior: solve from the prior as well, and keep that
+                // solution when it explains what the consensus solution explains and more.
+                let base = optimize(&initial, None);
+                if nested(params, matches, &result.inliers, &base.inliers) {
+                    result = base;
+                }
             }
-        }
-        if let Some(params) = hooks.mcor {
-            let matches: Vec<McorMatch> = clusters
-                .iter()
-                .zip(&obs)
-                .zip(&current)
-                .map(|((c, o), p)| McorMatch {
-                    cluster: c,
-                    map_point: o.point_world,
-                    point_camera: *p,
-                })
-                .collect();
-            let outcome = mcor_gate(params, &pose.inverse(), &matches);
-            for (k, e) in excluded.iter_mut().enumerate() {
-                *e = !outcome.kept(k);
+            if params.mask_radius_px > 0.0 {
+                // Seeds of the mask: matches outside the consensus that the final pose
+                // rejects too.
+                let seeds: Vec<bool> = outside
+                    .iter()
+                    .zip(&result.inliers)
+                    .map(|(&o, &inlier)| o && !inlier)
+                    .collect();
+                frame.dynamic = dynamic_mask(frame, params, &index, &seeds);
             }
-            last_gate = (outcome.n_rejected_clusters, outcome.n_rejected_features);
-            if tapped {
-                last_verdicts = Some(outcome.verdicts);
-            }
+            result
         }
     };
-    let result = pose_optimization_with(camera, &initial, &obs, cfg, &mut gate);
-    if let (Some(params), Some(out)) = (hooks.rc.filter(|p| p.mask_radius_px > 0.0), &rc_outlier) {
-        // Seeds of the mask: matches outside the consensus that the final pose rejects too.
-        let seeds: Vec<bool> = out
-            .iter()
-            .zip(&result.inliers)
-            .map(|(&o, &inlier)| o && !inlier)
-            .collect();
-        frame.dynamic = dynamic_mask(frame, params, &index, &seeds);
-    }
     frame.tcw = Some(renormalized(&result.pose));
     for (k, &i) in index.iter().enumerate() {
         frame.outliers[i] = !result.inliers[k];
