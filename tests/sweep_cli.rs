@@ -225,3 +225,51 @@ fn mapping_lag_is_pinned_per_folder() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+#[test]
+fn table_draws_rc_against_the_baseline_where_both_ran() {
+    let dir = tmpdir("rc-figure");
+    let d = dir.to_str().unwrap();
+    noisefree_ok(&[
+        "sweep",
+        "--seq",
+        "kinect",
+        "--configs",
+        "orb,rc",
+        "--runs",
+        "2",
+        "--frames",
+        FRAMES,
+        "--quiet",
+        "--jobs",
+        "2",
+        "--out",
+        d,
+    ]);
+    noisefree_ok(&["table", d]);
+    for f in ["ate_spread.png", "rc_vs_baseline.png", "rc_vs_baseline.svg"] {
+        let p = dir.join("figures").join(f);
+        let len = std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
+        assert!(len > 1000, "{} missing or empty", p.display());
+    }
+    // A folder without rc has no such figure.
+    let plain = tmpdir("no-rc-figure");
+    let p = plain.to_str().unwrap();
+    noisefree_ok(&[
+        "sweep",
+        "--seq",
+        "kinect",
+        "--configs",
+        "orb",
+        "--runs",
+        "1",
+        "--frames",
+        FRAMES,
+        "--quiet",
+        "--out",
+        p,
+    ]);
+    noisefree_ok(&["table", p]);
+    assert!(plain.join("figures/ate_spread.png").exists());
+    assert!(!plain.join("figures/rc_vs_baseline.png").exists());
+}

@@ -104,8 +104,12 @@ fn outlier_ratio(path: &Path) -> Result<Vec<(f64, f64)>> {
     Ok(out)
 }
 
+/// Issue 33's static-scene tolerance of rc against the baseline (3 % of the mean ATE), drawn as a
+/// band in `rc_vs_baseline`.
+const RC_TOLERANCE: f64 = 0.03;
+
 /// Writes the figures of a sweep folder into `<dir>/figures/`: the ATE spread over runs
-/// (Fig. 9), and per sequence the top-view trajectories of seed 0 aligned to the ground truth
+/// (Fig. 9), rc's ATE relative to the baseline's where both ran, and per sequence the top-view trajectories of seed 0 aligned to the ground truth
 /// (Fig. 1) and the outlier ratio over frames (Fig. 8).
 pub fn figures_for(dir: &Path, records: &[crate::sweep::store::RunRecord]) -> Result<()> {
     let fig = dir.join("figures");
@@ -128,6 +132,28 @@ pub fn figures_for(dir: &Path, records: &[crate::sweep::store::RunRecord]) -> Re
             Some(g) => g.2.push(a),
             None => groups.push((r.sequence.clone(), config, vec![a])),
         }
+    }
+    // rc against the baseline, where a folder has both: issue 33's tolerance band.
+    let relative: Vec<crate::figures::RelativeAte> = groups
+        .iter()
+        .filter(|g| g.1 == "rc")
+        .filter_map(|g| {
+            let base = groups.iter().find(|b| b.0 == g.0 && b.1 == "orb")?;
+            Some(crate::figures::RelativeAte {
+                sequence: g.0.clone(),
+                baseline_mean: base.2.iter().sum::<f64>() / base.2.len() as f64,
+                runs: g.2.clone(),
+            })
+        })
+        .collect();
+    if !relative.is_empty() {
+        crate::figures::relative_ate(
+            &fig.join("rc_vs_baseline"),
+            "rc against the baseline: ATE of each run / baseline's mean",
+            "rc",
+            RC_TOLERANCE,
+            &relative,
+        )?;
     }
     if !groups.is_empty() {
         crate::figures::ate_spread(
