@@ -72,7 +72,11 @@ pub struct RigidConsensusParams {
     /// only when the final pose rejects it too.
     pub veto_rounds: usize,
     /// A solution from the motion prior replaces the consensus's when its inliers hold this
-    /// share of the consensus solution's inlier weight, and more weight besides.
+    /// share of the consensus solution's inlier weight, and more weight besides. Not all of it:
+    /// a consensus solution that drifted along the far points also keeps a few matches that
+    /// only the wrong pose explains (8 % on a twin_fr2_coke frame whose two solutions were
+    /// 70 mm apart, 160 inliers against 225). At 0.8 a walker-dragged solution passed on
+    /// `walking-stereo` (151 mm against 1.9 mm).
     pub nested_share: f64,
     /// ... and when the matches it adds weigh on average at least this share of the consensus
     /// solution's mean weight (see [`nested`]).
@@ -92,7 +96,7 @@ impl Default for RigidConsensusParams {
             mask_radius_px: 0.0,
             mask_depth_m: 0.15,
             veto_rounds: 1,
-            nested_share: 0.95,
+            nested_share: 0.9,
             nested_evidence: 0.75,
             frames_per_weight: 8,
         }
@@ -178,7 +182,7 @@ fn cost(
     sum
 }
 
-/// Whether the inlier set `outer` holds `inner` (at least
+/// Whether the inlier set `outer` holds most of `inner` (at least
 /// [`RigidConsensusParams::nested_share`] of its weight) and adds matches as established as
 /// those of `inner` (their mean weight at least [`RigidConsensusParams::nested_evidence`] of
 /// `inner`'s): the two solutions then agree on the static world and `outer` explains more of it.
@@ -458,8 +462,9 @@ mod tests {
         let mut young = set(0..40);
         young[60..100].iter_mut().for_each(|b| *b = true);
         assert!(!nested(&p, &matches, &inner, &young));
-        // Loses a tenth of the consensus: not nested, whatever it adds.
-        assert!(!nested(&p, &matches, &inner, &set(4..60)));
+        // Loses a quarter of the consensus: not nested, whatever it adds; less than a tenth it may.
+        assert!(!nested(&p, &matches, &inner, &set(10..60)));
+        assert!(nested(&p, &matches, &inner, &set(3..60)));
         // Adds nothing: not nested (the consensus solution stays).
         assert!(!nested(&p, &matches, &inner, &inner));
     }
