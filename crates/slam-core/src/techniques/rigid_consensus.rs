@@ -52,7 +52,8 @@ pub struct RigidConsensusParams {
     pub hypotheses: usize,
     /// Fewer matches with depth than this: no gate (the frame is left to the optimizer).
     pub min_depth_matches: usize,
-    /// A match weighs the number of keyframes that saw its map point, at most this many.
+    /// A match weighs the number of keyframes that saw its map point (or the frames that found
+    /// it over `frames_per_weight`, if more), at most this many.
     pub weight_cap: u32,
     /// Keypoints within this many pixels of a rejected match with depth, and within
     /// `mask_depth_m` of its depth, create no map points when the frame becomes a keyframe
