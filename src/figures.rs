@@ -206,14 +206,7 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(seqs.len().max(1))
-            .x_label_formatter(&|x| {
-                let i = x.round();
-                if (x - i).abs() < 1e-6 && i >= 0.0 {
-                    seq_names.get(i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            })
+            .x_label_formatter(&|x| category_label(&seq_names, *x))
             .y_desc("ATE RMSE [m], log scale")
             .y_label_formatter(&|y| metres_label(*y))
             .label_style(("sans-serif", 16))
@@ -301,14 +294,7 @@ pub fn relative_ate(
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(n.max(1))
-            .x_label_formatter(&|x| {
-                let i = x.round();
-                if (x - i).abs() < 1e-6 && i >= 0.0 {
-                    labels.get(i as usize).cloned().unwrap_or_default()
-                } else {
-                    String::new()
-                }
-            })
+            .x_label_formatter(&|x| category_label(&labels, *x))
             .y_desc("ATE / baseline's mean ATE, log scale")
             .y_label_formatter(&|y| format!("{y:.3}"))
             .label_style(("sans-serif", 14))
@@ -355,6 +341,16 @@ pub fn relative_ate(
         chart.draw_series(bars).map_err(err)?;
         draw_legend(&mut chart)
     })
+}
+
+/// The tick label of a categorical x axis: the name at an integer position, nothing between.
+fn category_label(names: &[String], x: f64) -> String {
+    let i = x.round();
+    if (x - i).abs() < 1e-6 && i >= 0.0 {
+        names.get(i as usize).cloned().unwrap_or_default()
+    } else {
+        String::new()
+    }
 }
 
 /// A tick label for metres on a log axis: as many decimals as the value needs (0.001, 0.02,
