@@ -425,13 +425,15 @@ pub fn optimize_frame_pose(
         .iter()
         .map(|&i| frame.features.unproject_camera(i, camera))
         .collect();
-    let mut last_gate = (0, 0);
-    let mut last_verdicts: Option<Vec<McorVerdict>> = None;
     let tapped = tap_active();
     let rc_veto_rounds = hooks.rc.map_or(0, |p| p.veto_rounds);
     // One pose optimization from `start`; `veto` (one per match) keeps matches out of the
-    // first `veto_rounds` rounds.
-    let mut optimize = |start: &Isometry3<f64>, veto: Option<&[bool]>| {
+    // first `veto_rounds` rounds. Returned with MC-OR's outcome of its last round (rejected
+    // clusters and features, and the verdicts when tapped), so that the counts reported are
+    // those of the solution kept.
+    let optimize = |start: &Isometry3<f64>, veto: Option<&[bool]>| {
+        let mut last_gate = (0, 0);
+        let mut last_verdicts: Option<Vec<McorVerdict>> = None;
         // Hook point 2, before every round with the latest pose: re-aim the virtual cameras,
         // then re-run MC-OR (an observation rejected at a poor early pose may come back).
         let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
@@ -466,7 +468,8 @@ pub fn optimize_frame_pose(
                 }
             }
         };
-        pose_optimization_with(camera, start, &obs, cfg, &mut gate)
+        let result = pose_optimization_with(camera, start, &obs, cfg, &mut gate);
+        (result, last_gate, last_verdicts)
     };
     let consensus = match (hooks.rc, &rc_matches) {
         (Some(params), Some(matches)) => {
@@ -475,17 +478,17 @@ pub fn optimize_frame_pose(
         }
         _ => None,
     };
-    let result = match consensus {
+    let (result, last_gate, last_verdicts) = match consensus {
         None => optimize(&initial, None),
         Some((params, matches, c)) => {
             let outside: Vec<bool> = c.inlier.iter().map(|&i| !i).collect();
-            let mut result = optimize(&c.tcw, Some(&outside));
+            let mut solved = optimize(&c.tcw, Some(&outside));
             if !c.prior_won {
                 // A drawn hypothesis beat the prior: solve from the prior as well, and keep that
                 // solution when it explains what the consensus solution explains and more.
                 let base = optimize(&initial, None);
-                if nested(params, matches, &result.inliers, &base.inliers) {
-                    result = base;
+                if nested(params, matches, &solved.0.inliers, &base.0.inliers) {
+                    solved = base;
                 }
             }
             if params.mask_radius_px > 0.0 {
@@ -493,12 +496,12 @@ pub fn optimize_frame_pose(
                 // rejects too.
                 let seeds: Vec<bool> = outside
                     .iter()
-                    .zip(&result.inliers)
+                    .zip(&solved.0.inliers)
                     .map(|(&o, &inlier)| o && !inlier)
                     .collect();
                 frame.dynamic = dynamic_mask(frame, params, &index, &seeds);
             }
-            result
+            solved
         }
     };
     frame.tcw = Some(renormalized(&result.pose));
