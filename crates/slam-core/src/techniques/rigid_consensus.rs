@@ -52,9 +52,10 @@ use crate::Camera;
 #[serde(default)]
 pub struct RigidConsensusParams {
     /// Most hypotheses drawn per pose optimization (three depth matches each), besides the
-    /// prior: the adaptive rule's cap. 64 were always drawn before the rule (the first version);
-    /// on twin_fr3_w_half a frame whose static world held a fifth of the weight then drew a
-    /// static triple with probability 0.8, and the runs that missed it followed a walker.
+    /// prior: the adaptive rule's cap. Before the rule (the first two versions) 64 were always
+    /// drawn; on twin_fr3_w_half, frames whose static world held a fifth to a third of the
+    /// weight then drew a static triple with probability 0.4-0.9, and the runs that missed it
+    /// followed a walker.
     pub hypotheses: usize,
     /// Fewest hypotheses drawn, however well the best consensus holds: a prior that follows a
     /// body holds most of the matches too, and it is the draws that find the room.
