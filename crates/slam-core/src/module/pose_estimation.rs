@@ -181,34 +181,53 @@ pub fn mcor_frame_gate(
 
 /// Keypoints on the same moving body as a match the rigid consensus rejected: within
 /// `mask_radius_px` of a rejected keypoint with depth and within `mask_depth_m` of its depth.
-/// They create no map points when the frame becomes a keyframe.
+/// They create no map points when the frame becomes a keyframe, so that walkers who fill the
+/// view do not fill the young map with points that move.
 fn dynamic_mask(
     frame: &TrackedFrame,
     params: &RigidConsensusParams,
     index: &[usize],
-    outlier: &[bool],
+    rejected: &[bool],
 ) -> Vec<bool> {
     let f = &frame.features;
+    let radius = params.mask_radius_px as f32;
     let seeds: Vec<(f32, f32, f64)> = index
         .iter()
-        .zip(outlier)
-        .filter(|(_, &o)| o)
+        .zip(rejected)
+        .filter(|(_, &r)| r)
         .filter_map(|(&i, _)| {
             let kp = &f.keypoints[i];
             f.depth_of(i).map(|d| (kp.x, kp.y, d))
         })
         .collect();
-    let r2 = (params.mask_radius_px * params.mask_radius_px) as f32;
+    if seeds.is_empty() || radius <= 0.0 {
+        return vec![false; f.len()];
+    }
+    // The seeds bucketed in square cells as wide as the radius: a keypoint looks at its own
+    // cell and the eight around it.
+    let cell = |v: f32| (v.max(0.0) / radius) as usize;
+    let cols = seeds.iter().map(|s| cell(s.0)).max().unwrap_or(0) + 2;
+    let rows = seeds.iter().map(|s| cell(s.1)).max().unwrap_or(0) + 2;
+    let mut grid: Vec<Vec<usize>> = vec![Vec::new(); cols * rows];
+    for (k, s) in seeds.iter().enumerate() {
+        grid[cell(s.1) * cols + cell(s.0)].push(k);
+    }
+    let r2 = radius * radius;
     (0..f.len())
         .map(|i| {
             let kp = &f.keypoints[i];
             let Some(d) = f.depth_of(i) else {
                 return false;
             };
-            seeds.iter().any(|&(x, y, ds)| {
-                let (dx, dy) = (kp.x - x, kp.y - y);
-                dx * dx + dy * dy <= r2 && (d - ds).abs() <= params.mask_depth_m
-            })
+            let (cx, cy) = (cell(kp.x), cell(kp.y));
+            (cy.saturating_sub(1)..(cy + 2).min(rows))
+                .flat_map(|gy| (cx.saturating_sub(1)..(cx + 2).min(cols)).map(move |gx| (gx, gy)))
+                .flat_map(|(gx, gy)| &grid[gy * cols + gx])
+                .any(|&k| {
+                    let (x, y, ds) = seeds[k];
+                    let (dx, dy) = (kp.x - x, kp.y - y);
+                    dx * dx + dy * dy <= r2 && (d - ds).abs() <= params.mask_depth_m
+                })
         })
         .collect()
 }
@@ -491,7 +510,7 @@ pub fn optimize_frame_pose(
                     solved = base;
                 }
             }
-            if params.mask_radius_px > 0.0 {
+            if params.mask_radius_px > 0.0 && c.share < params.mask_below_share {
                 // Seeds of the mask: matches outside the consensus that the final pose
                 // rejects too.
                 let seeds: Vec<bool> = outside
@@ -784,14 +803,26 @@ mod tests {
             .filter(|&g| !plain.outliers[g])
             .collect();
         assert!(!kept_by_the_optimizer.is_empty() && kept_by_the_optimizer.len() < gross.len());
-        for (veto_rounds, mask_radius_px) in [(4, 24.0), (1, 24.0), (1, 0.0)] {
+        // The consensus holds 115 of 120 matches here: the default draws no mask (a static
+        // frame's rejected matches are not a body); a share gate above 1 draws it always.
+        let always = 1.01;
+        let default_gate = RigidConsensusParams::default().mask_below_share;
+        for (veto_rounds, mask_radius_px, mask_below_share) in [
+            (4, 24.0, always),
+            (1, 24.0, always),
+            (1, 16.0, always),
+            (1, 0.0, always),
+            (1, 16.0, default_gate),
+        ] {
             let params = RigidConsensusParams {
                 veto_rounds,
                 mask_radius_px,
+                mask_below_share,
                 ..RigidConsensusParams::default()
             };
             let (frame, counts) = run(Some(&params));
-            let case = format!("veto {veto_rounds}, mask {mask_radius_px}");
+            let case =
+                format!("veto {veto_rounds}, mask {mask_radius_px} below share {mask_below_share}");
             let kept: Vec<usize> = gross
                 .iter()
                 .copied()
@@ -810,11 +841,12 @@ mod tests {
             assert!(counts.n_inliers >= 110, "{case}: {counts:?}");
             assert!(error_m(&frame.tcw.unwrap()) < 0.005, "{case}");
             // The mask: every match outside the consensus that the final pose rejects too
-            // seeds it (and covers its own keypoint); a radius of 0 turns it off.
+            // seeds it (and covers its own keypoint); a radius of 0 turns it off, and so does
+            // a consensus that holds more than `mask_below_share` of the weight.
             let masked: Vec<usize> = (0..frame.dynamic.len())
                 .filter(|&i| frame.dynamic[i])
                 .collect();
-            if mask_radius_px > 0.0 {
+            if mask_radius_px > 0.0 && mask_below_share > 1.0 {
                 for g in gross.iter().filter(|g| !kept.contains(g)) {
                     assert!(masked.contains(g), "{case}: {g} not masked ({masked:?})");
                 }
@@ -826,6 +858,53 @@ mod tests {
                 assert!(masked.is_empty(), "{case}: {masked:?}");
             }
         }
+    }
+
+    #[test]
+    fn the_dynamic_mask_covers_exactly_the_keypoints_near_a_rejected_match_in_image_and_depth() {
+        // 120 keypoints spread over the image at 1.5-4 m; the mask, bucketed in cells, must
+        // agree with its definition checked against every rejected match, for radii that make
+        // cells smaller and larger than the spacing of the keypoints.
+        let (_, _, frame, _) = scene(&[]);
+        let index: Vec<usize> = (0..frame.len()).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let rejected: Vec<bool> = index.iter().map(|_| rng.random_bool(0.2)).collect();
+        let f = &frame.features;
+        for (radius, depth_m) in [(8.0, 0.15), (16.0, 0.15), (60.0, 0.3), (200.0, 0.05)] {
+            let params = RigidConsensusParams {
+                mask_radius_px: radius,
+                mask_depth_m: depth_m,
+                ..RigidConsensusParams::default()
+            };
+            let mask = dynamic_mask(&frame, &params, &index, &rejected);
+            let expected: Vec<bool> = (0..f.len())
+                .map(|i| {
+                    let kp = &f.keypoints[i];
+                    let d = f.depth_of(i).expect("every keypoint has depth");
+                    (0..f.len()).any(|j| {
+                        let s = &f.keypoints[j];
+                        let r2 = (kp.x - s.x).powi(2) + (kp.y - s.y).powi(2);
+                        rejected[j]
+                            && r2 <= (radius * radius) as f32
+                            && (d - f.depth_of(j).expect("depth")).abs() <= depth_m
+                    })
+                })
+                .collect();
+            assert_eq!(mask, expected, "radius {radius} px, {depth_m} m");
+            // Every rejected keypoint covers itself; at 200 px with 5 cm some keypoints are
+            // masked by a rejected neighbour, not only by themselves.
+            assert!(index.iter().all(|&i| !rejected[i] || mask[i]));
+            let by_neighbours = (0..f.len()).filter(|&i| mask[i] && !rejected[i]).count();
+            if radius >= 60.0 {
+                assert!(by_neighbours > 0, "radius {radius}: no neighbour masked");
+            }
+        }
+        // No rejected match: nothing masked.
+        let params = RigidConsensusParams::default();
+        let none = vec![false; index.len()];
+        assert!(dynamic_mask(&frame, &params, &index, &none)
+            .iter()
+            .all(|&m| !m));
     }
 
     #[test]
