@@ -13,7 +13,7 @@
 //! between the room and the people when the people's points are many and near; a consensus
 //! does not average, it picks.
 //!
-//! Two things make the static world win when people cover much of the view:
+//! Four things make the static world win when people cover much of the view:
 //! - **Evidence of time.** A match counts with the number of keyframes that saw its map point,
 //!   capped ([`RigidConsensusParams::weight_cap`]): the room has been seen from many keyframes,
 //!   a walking person's points are re-created as the person moves and have few.
@@ -21,6 +21,10 @@
 //! - **Evidence from the first second.** A match also weighs the frames that found its map
 //!   point ([`RigidConsensusParams::frames_per_weight`]), which grow thirty times faster than
 //!   keyframes.
+//! - **A map without the walkers.** Where the consensus holds little of the weight
+//!   ([`Consensus::share`] under [`RigidConsensusParams::mask_below_share`]), keypoints beside
+//!   a rejected match on the same body make no map points: walkers who fill the view of a young
+//!   map would otherwise fill it with points that move, and win the next frames' vote.
 //!
 //! A consensus can also be wrong on a static scene: at close range every hypothesis is a few
 //! millimetres off, the near points fall outside their tight gates, and the best hypothesis is
