@@ -47,8 +47,8 @@ pub use output::contact::{contact_sheet, write_contact_sheet};
 pub use output::euroc::write_euroc;
 pub use output::tum::write_tum;
 pub use sensor::depth::{
-    AxialNoise, DepthLag, DepthNoise, DisparityQuantisation, Holes, LateralNoise, Misregistration,
-    SystematicDistortion,
+    AxialNoise, BlobHoles, DepthLag, DepthNoise, DisparityQuantisation, FlyingPixels, Holes,
+    LateralNoise, Misregistration, SystematicDistortion,
 };
 pub use sensor::imaging::Imaging;
 pub use sensor::render::{ImageConfig, Supersampling};

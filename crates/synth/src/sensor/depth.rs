@@ -306,6 +306,149 @@ pub fn sensor_depth(
         .collect()
 }
 
+/// Depth lost in blobs, as structured-light and time-of-flight sensors lose it (dark or
+/// specular patches, interference): discs of random centre and radius are removed one after
+/// another until `share` of the image's valid pixels is gone. Applied to a measured depth
+/// image (the perturbation layer's `depth-holes`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlobHoles {
+    /// Share of the valid depth pixels to remove, in [0, 1).
+    pub share: f64,
+    /// Smallest and largest blob radius, pixels (default 3 to 14 at 640x480).
+    pub radius_px: (f64, f64),
+}
+
+impl BlobHoles {
+    /// Removes blobs from `depth` (`width x height`, metres, 0 = hole) until exactly
+    /// `round(share * valid)` more pixels are holes; every draw is a hash of `key`.
+    pub fn apply(&self, depth: &mut [f32], width: usize, height: usize, key: NoiseKey) {
+        let valid = depth.iter().filter(|&&z| z > 0.0).count();
+        let target = (self.share.clamp(0.0, 1.0) * valid as f64).round() as usize;
+        let mut removed = 0usize;
+        let mut blob = 0u64;
+        // A blob draws 3 numbers; stop also when the image has nothing left to remove.
+        while removed < target && blob < 64 * (width * height) as u64 {
+            let cx = key.uniform(3 * blob) * width as f64;
+            let cy = key.uniform(3 * blob + 1) * height as f64;
+            let (r0, r1) = self.radius_px;
+            let r = r0 + (r1 - r0) * key.uniform(3 * blob + 2);
+            blob += 1;
+            let (x0, x1) = ((cx - r).floor().max(0.0) as usize, (cx + r).ceil() as usize);
+            let (y0, y1) = ((cy - r).floor().max(0.0) as usize, (cy + r).ceil() as usize);
+            for y in y0..y1.min(height) {
+                for x in x0..x1.min(width) {
+                    let (dx, dy) = (x as f64 + 0.5 - cx, y as f64 + 0.5 - cy);
+                    let z = &mut depth[y * width + x];
+                    if dx * dx + dy * dy <= r * r && *z > 0.0 {
+                        *z = 0.0;
+                        removed += 1;
+                        if removed == target {
+                            return;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Flying pixels: at a depth discontinuity a time-of-flight or structured-light pixel that sees
+/// both surfaces returns a depth between them. Every valid pixel within `band_px` pixels
+/// (Chebyshev distance) of a jump larger than `jump` of its depth takes a depth drawn
+/// uniformly between the nearest and the farthest valid depth within `band_px` of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlyingPixels {
+    /// Half-width of the band around a discontinuity, pixels.
+    pub band_px: usize,
+    /// Relative depth difference between 4-neighbours that makes a discontinuity (default 0.05,
+    /// as [`Holes::boundary_jump`]).
+    pub jump: f64,
+}
+
+impl FlyingPixels {
+    /// Returns `depth` with flying pixels (rounded to the PNG grid of `units` per metre); pixels
+    /// away from discontinuities keep their bytes.
+    pub fn apply(
+        &self,
+        depth: &[f32],
+        width: usize,
+        height: usize,
+        units: f64,
+        key: NoiseKey,
+    ) -> Vec<f32> {
+        let (w, h) = (width, height);
+        let at = |x: usize, y: usize| depth[y * w + x];
+        // Discontinuity pixels: a valid 4-neighbour whose depth differs by more than `jump`.
+        let mut edge = vec![false; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let z = at(x, y);
+                if z <= 0.0 {
+                    continue;
+                }
+                let lim = self.jump as f32 * z;
+                let mut e = false;
+                for (nx, ny) in [
+                    (x.wrapping_sub(1), y),
+                    (x + 1, y),
+                    (x, y.wrapping_sub(1)),
+                    (x, y + 1),
+                ] {
+                    if nx < w && ny < h {
+                        let n = at(nx, ny);
+                        e |= n > 0.0 && (n - z).abs() > lim;
+                    }
+                }
+                edge[y * w + x] = e;
+            }
+        }
+        // Dilate by band_px - 1 (a band of 1 is the discontinuity pixels themselves).
+        let mut band = edge.clone();
+        let r = self.band_px.saturating_sub(1);
+        if r > 0 {
+            let mut rows = vec![false; w * h];
+            for y in 0..h {
+                for x in 0..w {
+                    let (a, b) = (x.saturating_sub(r), (x + r).min(w - 1));
+                    rows[y * w + x] = (a..=b).any(|k| edge[y * w + k]);
+                }
+            }
+            for y in 0..h {
+                for x in 0..w {
+                    let (a, b) = (y.saturating_sub(r), (y + r).min(h - 1));
+                    band[y * w + x] = (a..=b).any(|k| rows[k * w + x]);
+                }
+            }
+        }
+        (0..w * h)
+            .into_par_iter()
+            .map(|i| {
+                let z = depth[i];
+                if !band[i] || z <= 0.0 || self.band_px == 0 {
+                    return z;
+                }
+                let (x, y) = (i % w, i / w);
+                let r = self.band_px;
+                let (mut lo, mut hi) = (f32::INFINITY, 0f32);
+                for ny in y.saturating_sub(r)..=(y + r).min(h - 1) {
+                    for nx in x.saturating_sub(r)..=(x + r).min(w - 1) {
+                        let n = at(nx, ny);
+                        if n > 0.0 {
+                            lo = lo.min(n);
+                            hi = hi.max(n);
+                        }
+                    }
+                }
+                if hi <= lo {
+                    return z;
+                }
+                let t = key.uniform(i as u64);
+                quantise_png(lo as f64 + t * (hi - lo) as f64, units)
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

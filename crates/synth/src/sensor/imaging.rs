@@ -166,6 +166,17 @@ impl SensorNoise {
     }
 }
 
+impl SensorNoise {
+    /// Adds this noise at unit gain to an 8-bit grey image already captured (the perturbation
+    /// layer's `image-noise`): each pixel gets N(0, sigma(its level)), rounded and clipped.
+    pub fn apply_gray8(&self, grey: &[u8], key: NoiseKey) -> Vec<u8> {
+        grey.par_iter()
+            .enumerate()
+            .map(|(i, &g)| grey_level(g as f64 + self.sigma(g as f64, 1.0) * key.normal(i as u64)))
+            .collect()
+    }
+}
+
 /// Sub-pixel offset (in -0.5..0.5) of time sample `k` of `n`: a rank-1 lattice (Fibonacci-like
 /// over n points), so the samples of one pixel cover it evenly and each falls at its own time.
 pub fn sample_offset(k: usize, n: usize) -> (f64, f64) {
