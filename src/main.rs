@@ -42,6 +42,9 @@ enum Command {
     Plot(commands::plot::PlotArgs),
     /// Generate a synthetic RGB-D or stereo sequence (TUM or EuRoC layout) with exact ground truth.
     Synth(commands::synth::SynthArgs),
+    /// Write a perturbed copy of any sequence (depth, image, time, moving occluders, stereo
+    /// misalignment) as a TUM or EuRoC folder any SLAM program reads.
+    Perturb(commands::perturb::PerturbArgs),
     /// Download and unpack catalogued sequences (datasets.toml) into the data directory.
     Fetch(commands::fetch::FetchArgs),
     /// Detect ORB features on an image and draw them into a PNG.
@@ -67,6 +70,7 @@ fn main() -> ExitCode {
         Command::Eval(a) => commands::eval::run(a),
         Command::Synth(a) => commands::synth::run(a),
         Command::Fetch(a) => commands::fetch::run(a),
+        Command::Perturb(a) => commands::perturb::run(a),
         Command::Features(a) => commands::features::run(a),
         Command::Regress(a) => commands::regress::run(a),
         Command::Vocab(a) => commands::vocab::run(a),

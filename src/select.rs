@@ -57,7 +57,8 @@ pub struct LoadOptions {
     pub camera: Option<PathBuf>,
 }
 
-/// Loads (or generates) the sequence of `source`, every frame decoded.
+/// Loads (or generates) the sequence of `source`, every frame decoded (the runner's tests).
+#[cfg(test)]
 pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Sequence> {
     let (mut seq, frames) = open(source, catalog, opts)?;
     seq.frames = frames

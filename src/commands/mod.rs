@@ -4,6 +4,7 @@ pub mod analyze;
 pub mod eval;
 pub mod features;
 pub mod fetch;
+pub mod perturb;
 pub mod plot;
 pub mod regress;
 pub mod run;

@@ -4,7 +4,7 @@
 
 use crate::config_file::{apply_switches, base_config, config_name, overlay_file, Switches};
 use crate::runner::{run_extracted, run_sequence, ExtractedSequence, RunOutcome};
-use crate::select::{load, open, LoadOptions, Source};
+use crate::select::{open, LoadOptions, Source};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{write_atomic, write_tum};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -95,6 +95,14 @@ pub struct RunArgs {
     /// Catalog file [default: the datasets.toml compiled into the binary].
     #[arg(long, value_name = "FILE")]
     pub catalog: Option<PathBuf>,
+    /// Perturb the sequence before anything reads it: `family:level[+family:level...]`, e.g.
+    /// `depth-axial:2+depth-lateral:2` (families and units: `noisefree perturb --list`).
+    #[arg(long, value_name = "CHAIN")]
+    pub perturb: Option<String>,
+    /// Seed of the perturbation's random draws (independent of --seed: every run sees the same
+    /// perturbed copy).
+    #[arg(long = "perturb-seed", default_value_t = 0, value_name = "S")]
+    pub perturb_seed: u64,
     /// No progress bars.
     #[arg(long)]
     pub quiet: bool,
@@ -173,6 +181,9 @@ pub fn run(args: RunArgs) -> Result<()> {
     };
     let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
     let label = source.label();
+    // Checked before anything is read.
+    let chain =
+        perturb::Chain::parse(args.perturb.as_deref().unwrap_or("")).context("--perturb")?;
     let opts = LoadOptions {
         data_dir: datasets::data_root(args.data_dir.as_deref()),
         frames: args.frames,
@@ -185,11 +196,23 @@ pub fn run(args: RunArgs) -> Result<()> {
     }
     // Several runs share every frame's features, extracted once as the frames are read; a
     // single run decodes the sequence and extracts as it tracks.
-    let (seq, reader) = if args.runs > 1 {
-        let (seq, frames) = open(&source, &catalog, &opts)?;
-        (seq, Some(frames))
+    let (seq, frames) = open(&source, &catalog, &opts)?;
+    let (mut seq, frames) = perturb::perturb_sequence(&seq, frames, &chain, args.perturb_seed)
+        .with_context(|| format!("--perturb {chain}"))?;
+    if !chain.is_identity() && !args.quiet {
+        eprintln!(
+            "{label}: perturbed by {} (perturbation seed {})",
+            chain.effective(),
+            args.perturb_seed
+        );
+    }
+    let reader = if args.runs > 1 {
+        Some(frames)
     } else {
-        (load(&source, &catalog, &opts)?, None)
+        seq.frames = frames
+            .read_all()
+            .with_context(|| format!("loading {label}"))?;
+        None
     };
     let n_frames = reader.as_ref().map_or(seq.len(), |r| r.len());
     let mut config = base_config(seq.camera.sensor);

@@ -78,6 +78,24 @@ pub fn cache_root(dir: &Path) -> Result<PathBuf> {
     Ok(dir.to_path_buf())
 }
 
+/// The folder a real sequence is read from (`None` for a synthetic one).
+pub fn source_folder(
+    source: &Source,
+    catalog: &Catalog,
+    opts: &LoadOptions,
+) -> Result<Option<PathBuf>> {
+    Ok(match source {
+        Source::Path(p) => Some(p.clone()),
+        Source::Catalog(name) => {
+            let entry = catalog.get(name)?;
+            match &entry.preset {
+                Some(_) => None,
+                None => entry.path(&opts.data_dir),
+            }
+        }
+    })
+}
+
 /// Puts the sequence of `source` on disk for external programs and writes the files naming
 /// its first `frames` frames. `seq` is the sequence as noisefree opened it (its camera is the
 /// settings file's); `opts` carries the synthetic realization (seed, effects off).

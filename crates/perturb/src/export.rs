@@ -71,12 +71,14 @@ fn pose_digits(p: &Isometry3<f64>) -> ([f64; 3], [f64; 4]) {
 
 /// Writes `frames` of `seq` into `dir` (which must not exist or be empty) in the layout of its
 /// sensor; `note` goes into `perturbation.txt` (what was applied, with which seed), `progress`
-/// gets the frames written so far.
+/// gets the frames written so far. `source`: the folder the sequence was read from, if any: its
+/// ground-truth file is copied as distributed (byte for byte) rather than written anew.
 pub fn write_folder(
     seq: &Sequence,
     frames: &FrameReader,
     dir: &Path,
     note: &str,
+    source: Option<&Path>,
     progress: impl Fn(usize) + Sync,
 ) -> Result<(), PerturbError> {
     if dir.exists()
@@ -105,6 +107,7 @@ pub fn write_folder(
         Format::TumRgbd => write_tum(seq, frames, &tmp, &progress),
         Format::EurocStereo => write_euroc(seq, frames, &tmp, &progress),
     }
+    .and_then(|()| copy_groundtruth(seq.format, source, &tmp))
     .and_then(|()| {
         for format in [SettingsFormat::Orbslam2, SettingsFormat::Orbslam3] {
             let s = write_settings(
@@ -124,6 +127,33 @@ pub fn write_folder(
         std::fs::remove_dir(dir).map_err(|e| werr(dir, e))?;
     }
     std::fs::rename(&tmp, dir).map_err(|e| werr(dir, e))
+}
+
+/// The ground-truth file of a source folder, where it has one, copied over the one written from
+/// memory.
+fn copy_groundtruth(
+    format: Format,
+    source: Option<&Path>,
+    root: &Path,
+) -> Result<(), PerturbError> {
+    let Some(src) = source else { return Ok(()) };
+    let rel = match format {
+        Format::TumRgbd => "groundtruth.txt",
+        Format::EurocStereo => "mav0/state_groundtruth_estimate0/data.csv",
+    };
+    let mut from = src.join(rel);
+    if format == Format::EurocStereo && !from.is_file() {
+        // A folder that is mav0 itself.
+        from = src.join("state_groundtruth_estimate0/data.csv");
+    }
+    if from.is_file() {
+        let to = root.join(rel);
+        if let Some(parent) = to.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| werr(parent, e))?;
+        }
+        std::fs::copy(&from, &to).map_err(|e| werr(&from, e))?;
+    }
+    Ok(())
 }
 
 fn write_tum(
@@ -163,7 +193,7 @@ fn write_tum(
                 } else {
                     0
                 };
-                bytes.extend_from_slice(&v.to_be_bytes());
+                bytes.extend_from_slice(&v.to_ne_bytes());
             }
             png(
                 &root.join("depth").join(&file),

@@ -1,0 +1,220 @@
+//! `noisefree perturb`: writes a perturbed copy of any sequence (catalogued, synthetic, or a
+//! folder) as a TUM RGB-D or EuRoC ASL folder that any SLAM program reads, with the camera as
+//! ORB-SLAM2 / ORB-SLAM3 settings beside it, and optionally a contact sheet (input | perturbed |
+//! perturbed depth or right image) of four frames.
+
+use crate::select::{open, LoadOptions, Source};
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use perturb::{perturb_sequence, Chain, Family};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `noisefree perturb`.
+#[derive(clap::Args, Debug)]
+pub struct PerturbArgs {
+    /// Catalogued sequence or synthetic preset (default: the embedded `kinect`).
+    #[arg(long, value_name = "NAME", conflicts_with = "path")]
+    pub seq: Option<String>,
+    /// Any TUM RGB-D or EuRoC ASL folder.
+    #[arg(long, value_name = "DIR")]
+    pub path: Option<PathBuf>,
+    /// The folder's camera from an ORB-SLAM2 / ORB-SLAM3 settings file.
+    #[arg(long, value_name = "FILE.yaml", requires = "path")]
+    pub camera: Option<PathBuf>,
+    /// The perturbation: `family:level[+family:level...]` (see --list).
+    #[arg(long, value_name = "CHAIN", required_unless_present = "list")]
+    pub perturb: Option<String>,
+    /// Seed of the perturbation's random draws.
+    #[arg(long = "perturb-seed", default_value_t = 0, value_name = "S")]
+    pub perturb_seed: u64,
+    /// Output folder (must not exist or be empty).
+    #[arg(
+        short = 'o',
+        long = "out",
+        value_name = "DIR",
+        required_unless_present = "list"
+    )]
+    pub out: Option<PathBuf>,
+    /// Also write a contact sheet PNG: input | perturbed | perturbed depth (RGB-D) or right
+    /// image (stereo), four frames spread over the sequence.
+    #[arg(long = "contact-sheet", value_name = "FILE.png")]
+    pub contact_sheet: Option<PathBuf>,
+    /// Synthetic sequences: number of frames; real ones: only the first N frames.
+    #[arg(long, value_name = "N")]
+    pub frames: Option<usize>,
+    /// Seed of a synthetic sequence's scene and noise.
+    #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
+    pub synth_seed: u64,
+    /// Data root for catalogued real sequences [default: $NOISEFREE_DATA, else ./data].
+    #[arg(long = "data-dir", value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// List the perturbation families, their units and valid levels, and exit.
+    #[arg(long)]
+    pub list: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// The families as a table (for `--list` and the README).
+pub fn family_table() -> String {
+    let mut s = String::from("family               unit                  levels\n");
+    for f in Family::ALL {
+        let (lo, hi, whole) = f.range();
+        s.push_str(&format!(
+            "{:<20} {:<21} {lo} to {hi}{}\n",
+            f.name(),
+            f.unit(),
+            if whole { ", whole" } else { "" }
+        ));
+    }
+    s
+}
+
+/// Runs `noisefree perturb`.
+pub fn run(args: PerturbArgs) -> Result<()> {
+    if args.list {
+        print!("{}", family_table());
+        return Ok(());
+    }
+    let chain = Chain::parse(args.perturb.as_deref().unwrap_or("")).context("--perturb")?;
+    let out = args.out.clone().context("--out is required")?;
+    if out.exists() && std::fs::read_dir(&out)?.next().is_some() {
+        bail!(
+            "{}: the output folder exists and is not empty",
+            out.display()
+        );
+    }
+    let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
+    let opts = LoadOptions {
+        data_dir: datasets::data_root(args.data_dir.as_deref()),
+        frames: args.frames,
+        synth_seed: args.synth_seed,
+        synth_without: Vec::new(),
+        camera: args.camera.clone(),
+    };
+    let catalog = datasets::Catalog::embedded();
+    let (seq, input) = open(&source, &catalog, &opts)?;
+    let (seq, frames) = perturb_sequence(&seq, input.clone(), &chain, args.perturb_seed)
+        .with_context(|| format!("--perturb {chain}"))?;
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(frames.len() as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>10} [{bar:40}] {pos}/{len} frames, eta {eta}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_prefix("perturb");
+    let note = format!(
+        "source {}\nperturbation {}\nperturbation_seed {}\nframes {}\nsynth_seed {}\nwritten by noisefree {}",
+        source.label(),
+        chain,
+        args.perturb_seed,
+        frames.len(),
+        args.synth_seed,
+        env!("CARGO_PKG_VERSION")
+    );
+    let folder = crate::external::export::source_folder(&source, &catalog, &opts)?;
+    perturb::write_folder(&seq, &frames, &out, &note, folder.as_deref(), |k| {
+        bar.set_position(k as u64)
+    })
+    .with_context(|| format!("writing {}", out.display()))?;
+    bar.finish_and_clear();
+    if let Some(sheet) = &args.contact_sheet {
+        write_sheet(
+            &input,
+            &frames,
+            &perturb_sources(&seq, &chain, args.perturb_seed, input.len())?,
+            sheet,
+        )?;
+    }
+    eprintln!(
+        "{}: {} frames perturbed by {chain} (seed {}) written to {} (camera: camera-orbslam2.yaml; \
+         run it with `noisefree run --path {} --camera {}`)",
+        source.label(),
+        frames.len(),
+        args.perturb_seed,
+        out.display(),
+        out.display(),
+        out.join("camera-orbslam2.yaml").display()
+    );
+    Ok(())
+}
+
+/// For each output frame, the input frame it shows.
+fn perturb_sources(
+    seq: &datasets::Sequence,
+    chain: &Chain,
+    seed: u64,
+    input_len: usize,
+) -> Result<Vec<usize>> {
+    let p = perturb::Perturber::new(chain, &seq.camera, 5000.0, seed, input_len, &seq.name)?;
+    Ok((0..p.len()).map(|i| p.source(i)).collect())
+}
+
+/// Half-resolution tiles of four frames: input | perturbed | perturbed depth or right image.
+fn write_sheet(
+    input: &datasets::FrameReader,
+    out: &datasets::FrameReader,
+    sources: &[usize],
+    path: &Path,
+) -> Result<()> {
+    let n = out.len();
+    let rows: Vec<usize> = (0..4.min(n)).map(|r| (r * n + n / 8) / 4.min(n)).collect();
+    let first = out.read(0)?;
+    let (w, h) = (first.image.width / 2, first.image.height / 2);
+    let gap = 4;
+    let mut img = image::RgbImage::from_pixel(
+        (3 * w + 4 * gap) as u32,
+        (rows.len() * (h + gap) + gap) as u32,
+        image::Rgb([255, 255, 255]),
+    );
+    for (r, &i) in rows.iter().enumerate() {
+        let (a, b) = (input.read(sources[i])?, out.read(i)?);
+        let depth_tile = |d: &slam_core::DepthImage| -> Vec<[u8; 3]> {
+            d.data
+                .iter()
+                .map(|&z| {
+                    if z <= 0.0 {
+                        [0, 0, 0]
+                    } else {
+                        let t = ((z - 0.4) / 4.6).clamp(0.0, 1.0);
+                        [
+                            (255.0 * (1.0 - t)) as u8,
+                            (255.0 * (1.0 - (2.0 * t - 1.0).abs())) as u8,
+                            (255.0 * t) as u8,
+                        ]
+                    }
+                })
+                .collect()
+        };
+        let grey = |g: &slam_core::GrayImage| -> Vec<[u8; 3]> {
+            g.data.iter().map(|&v| [v, v, v]).collect()
+        };
+        let third = match (&b.depth, &b.right) {
+            (Some(d), _) => depth_tile(d),
+            (None, Some(r)) => grey(r),
+            _ => grey(&b.image),
+        };
+        for (c, tile) in [grey(&a.image), grey(&b.image), third].iter().enumerate() {
+            let (x0, y0) = (gap + c * (w + gap), gap + r * (h + gap));
+            for y in 0..h {
+                for x in 0..w {
+                    let p = tile[(2 * y) * (2 * w) + 2 * x];
+                    img.put_pixel((x0 + x) as u32, (y0 + y) as u32, image::Rgb(p));
+                }
+            }
+        }
+    }
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .context("encoding the contact sheet")?;
+    ate_eval::io::write_atomic(path, &bytes)?;
+    Ok(())
+}

@@ -1,0 +1,165 @@
+//! `noisefree perturb` and `run --perturb`: a perturbed folder written by `perturb` and run as
+//! any folder gives the same trajectory, bit for bit, as the internal run under the same
+//! perturbation (RGB-D synthetic, stereo synthetic, and the real EuRoC frames of ../shared);
+//! bad perturbations are refused before anything runs.
+
+mod common;
+
+use common::{assert_clean_failure, noisefree, noisefree_ok, tmpdir};
+use std::path::Path;
+
+/// `exact_ate`: the ATE too is the same to the bit (synthetic sequences); a real EuRoC folder's
+/// body-camera extrinsic passes through sensor.yaml's 4x4 matrix text, whose rotation reads back
+/// within an ulp or so, so its ATE (body frame) agrees to 1e-12 relative.
+fn same_trajectory(src: &[&str], chain: &str, frames: &str, name: &str, exact_ate: bool) {
+    let dir = tmpdir(name);
+    let folder = dir.join("perturbed");
+    let f = folder.to_str().unwrap();
+    let mut args = vec![
+        "perturb",
+        "--perturb",
+        chain,
+        "--frames",
+        frames,
+        "-o",
+        f,
+        "--quiet",
+    ];
+    args.extend_from_slice(src);
+    let sheet = dir.join("sheet.png");
+    args.extend_from_slice(&["--contact-sheet", sheet.to_str().unwrap()]);
+    noisefree_ok(&args);
+    assert!(sheet.is_file());
+    let note = std::fs::read_to_string(folder.join("perturbation.txt")).unwrap();
+    assert!(note.contains(&format!("perturbation {chain}")), "{note}");
+    let (a, b) = (dir.join("internal"), dir.join("external"));
+    let mut run = vec![
+        "run",
+        "--perturb",
+        chain,
+        "--frames",
+        frames,
+        "--quiet",
+        "--out",
+        a.to_str().unwrap(),
+    ];
+    run.extend_from_slice(src);
+    noisefree_ok(&run);
+    let camera = folder.join("camera-orbslam2.yaml");
+    noisefree_ok(&[
+        "run",
+        "--path",
+        f,
+        "--camera",
+        camera.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        b.to_str().unwrap(),
+    ]);
+    let read = |d: &Path| std::fs::read_to_string(d.join("trajectory.txt")).unwrap();
+    assert_eq!(read(&a), read(&b), "{chain} on {src:?}");
+    let ate = |d: &Path| {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap())
+                .unwrap();
+        s["ate_rmse_m"].as_f64().unwrap()
+    };
+    if exact_ate {
+        assert_eq!(ate(&a).to_bits(), ate(&b).to_bits());
+    } else {
+        assert!(
+            (ate(&a) / ate(&b) - 1.0).abs() < 1e-12,
+            "{} {}",
+            ate(&a),
+            ate(&b)
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_perturbed_rgbd_folder_runs_bit_for_bit_as_the_internal_perturbation() {
+    same_trajectory(
+        &["--seq", "kinect"],
+        "depth-axial:2+depth-lateral:1+depth-holes:5+occluders:1",
+        "40",
+        "perturb-rgbd",
+        true,
+    );
+}
+
+#[test]
+fn a_perturbed_stereo_folder_runs_bit_for_bit_as_the_internal_perturbation() {
+    same_trajectory(
+        &["--seq", "stereo"],
+        "image-noise:4+stereo-misalignment:0.1+stamp-jitter:2",
+        "30",
+        "perturb-stereo",
+        true,
+    );
+}
+
+#[test]
+fn real_euroc_frames_perturbed_run_bit_for_bit_as_the_internal_perturbation() {
+    let euroc = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/euroc_v101_head"
+    );
+    if !Path::new(euroc).is_dir() {
+        eprintln!("skipped: {euroc} is not on this machine");
+        return;
+    }
+    same_trajectory(
+        &["--path", euroc],
+        "occluders:1+exposure:5",
+        "30",
+        "perturb-euroc",
+        false,
+    );
+}
+
+#[test]
+fn bad_perturbations_are_refused_before_anything_runs() {
+    let dir = tmpdir("perturb-bad");
+    let out = dir.join("o");
+    let o = out.to_str().unwrap();
+    for (chain, needle) in [
+        ("depth-nois:2", "unknown perturbation \"depth-nois\""),
+        (
+            "depth-axial:200",
+            "depth-axial:200: the level must be 0 to 100",
+        ),
+        ("frame-drop:1.5", "whole number"),
+        ("depth-axial", "expected family:level"),
+    ] {
+        assert_clean_failure(
+            &noisefree(&["perturb", "--perturb", chain, "-o", o]),
+            needle,
+        );
+        assert_clean_failure(&noisefree(&["run", "--perturb", chain, "--out", o]), needle);
+        assert!(!out.exists(), "nothing written for {chain}");
+    }
+    assert_clean_failure(
+        &noisefree(&[
+            "run",
+            "--seq",
+            "stereo",
+            "--perturb",
+            "depth-holes:10",
+            "--out",
+            o,
+        ]),
+        "depth-holes does not apply to stereo, a stereo sequence",
+    );
+    assert!(!out.exists());
+    let list = noisefree_ok(&["perturb", "--list"]);
+    let text = String::from_utf8_lossy(&list.stdout);
+    for f in [
+        "depth-axial",
+        "occluders",
+        "stereo-misalignment",
+        "x Nguyen sigma",
+    ] {
+        assert!(text.contains(f), "{text}");
+    }
+}
