@@ -404,3 +404,103 @@ pub fn per_frame(
         draw_legend(&mut chart)
     })
 }
+
+/// One curve of [`resilience`]: its label and, per level, (level, `Some((mean, min, max))` of
+/// its runs' ATE, or `None` where more than half of them failed).
+pub type ResilienceCurve = (String, Vec<(f64, Option<(f64, f64, f64)>)>);
+
+/// A resilience figure: ATE against the perturbation level, one line per system through its
+/// mean, a bar over its runs' range (min to max) at each level, a cross where more than half of
+/// its runs failed (drawn at the top), on a logarithmic ATE axis. Levels are spaced evenly in
+/// their severity order (so 0, 1, 2, 4, 8 read as steps, and JPEG's falling quality left to
+/// right). `curves`: (label, per level: (level, Some((mean, min, max)) or None for a failure)).
+pub fn resilience(
+    stem: &Path,
+    title: &str,
+    x_desc: &str,
+    curves: &[ResilienceCurve],
+) -> Result<()> {
+    let mut levels: Vec<f64> = Vec::new();
+    for (_, pts) in curves {
+        for (l, _) in pts {
+            if !levels.contains(l) {
+                levels.push(*l);
+            }
+        }
+    }
+    let x_of = |l: f64| levels.iter().position(|k| *k == l).unwrap_or(0) as f64;
+    let values = || {
+        curves
+            .iter()
+            .flat_map(|(_, p)| p.iter().filter_map(|(_, v)| *v))
+            .flat_map(|(m, a, b)| [m, a, b])
+            .filter(|v| *v > 0.0 && v.is_finite())
+    };
+    let top = values().fold(1e-3f64, f64::max) * 2.0;
+    let ymin = values().fold(top, f64::min).min(top / 10.0) / 1.5;
+    const LEGEND: f64 = 0.3;
+    let ymax = ((top.ln() - LEGEND * ymin.ln()) / (1.0 - LEGEND)).exp();
+    let names: Vec<String> = levels.iter().map(|l| format!("{l}")).collect();
+    both!(stem, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 26))
+            .margin(20)
+            .x_label_area_size(60)
+            .y_label_area_size(80)
+            .build_cartesian_2d(
+                -0.3f64..(levels.len() as f64 - 0.7),
+                (ymin..ymax).log_scale(),
+            )
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(levels.len().max(1))
+            .x_label_formatter(&|x| category_label(&names, *x))
+            .x_desc(x_desc)
+            .y_desc("ATE RMSE [m], log scale")
+            .y_label_formatter(&|y| metres_label(*y))
+            .label_style(("sans-serif", 16))
+            .draw()
+            .map_err(err)?;
+        let n = curves.len().max(1) as f64;
+        for (ci, (label, pts)) in curves.iter().enumerate() {
+            let color = PALETTE[(ci + 1) % PALETTE.len()];
+            // A small offset per system, so bars at one level do not hide each other.
+            let dx = (ci as f64 + 0.5) / n * 0.3 - 0.15;
+            let line: Vec<(f64, f64)> = pts
+                .iter()
+                .filter_map(|(l, v)| v.map(|(m, _, _)| (x_of(*l) + dx, m)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(line.clone(), color.stroke_width(3)))
+                .map_err(err)?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                });
+            chart
+                .draw_series(line.iter().map(|&p| Circle::new(p, 5, color.filled())))
+                .map_err(err)?;
+            chart
+                .draw_series(pts.iter().filter_map(|(l, v)| {
+                    v.map(|(_, a, b)| {
+                        let x = x_of(*l) + dx;
+                        PathElement::new(
+                            vec![(x, a.max(ymin)), (x, b.max(ymin))],
+                            color.stroke_width(2),
+                        )
+                    })
+                }))
+                .map_err(err)?;
+            chart
+                .draw_series(
+                    pts.iter().filter(|(_, v)| v.is_none()).map(|(l, _)| {
+                        Cross::new((x_of(*l) + dx, top / 1.3), 8, color.stroke_width(3))
+                    }),
+                )
+                .map_err(err)?;
+        }
+        draw_legend(&mut chart)
+    })
+}

@@ -8,6 +8,7 @@ mod config_file;
 mod external;
 mod figures;
 mod regress;
+mod resilience;
 mod runner;
 mod select;
 mod sweep;

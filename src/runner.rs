@@ -151,6 +151,124 @@ impl ExtractedSequence {
     }
 }
 
+/// A frame extracted without its depth, and what its extraction took (ms).
+pub type ImageFrame = (Arc<slam_core::frame::Frame>, f64);
+
+/// A sequence's frames extracted once for one set of ORB settings, *without* their depth
+/// (RGB-D; stereo frames keep their own matches), so that each depth-only or time perturbation
+/// of the sequence (`sweep --perturb depth-axial:...`, `frame-drop`, `stamp-jitter`) reuses the
+/// keypoints and descriptors and only attaches its own depth: the ORB extraction, the bulk of a
+/// frame's cost, is paid once per sequence instead of once per level.
+#[derive(Clone, Debug)]
+pub struct ImageFrames {
+    /// The ORB settings.
+    pub orb: OrbConfig,
+    /// Per input frame: the frame without depth, and what its extraction took (ms).
+    pub frames: Vec<ImageFrame>,
+}
+
+impl ImageFrames {
+    /// Reads every frame of `frames` and extracts it once per ORB setting of `orbs` without
+    /// its depth, in parallel over frames.
+    pub fn extract_all(
+        frames: &FrameReader,
+        camera: &Camera,
+        orbs: &[OrbConfig],
+        on_frame: impl Fn() + Sync,
+    ) -> Result<Vec<Self>, DatasetError> {
+        let per_frame: Vec<Result<Vec<ImageFrame>, DatasetError>> = (0..frames.len())
+            .into_par_iter()
+            .map_init(
+                || -> Vec<OrbExtractor> { orbs.iter().cloned().map(OrbExtractor::new).collect() },
+                |extractors, i| {
+                    let mut input = frames.read(i)?;
+                    input.depth = None;
+                    let out = extractors
+                        .iter_mut()
+                        .map(|extractor| {
+                            let t = Instant::now();
+                            let f = slam_core::frame::Frame::new(0, &input, camera, extractor);
+                            (Arc::new(f), t.elapsed().as_secs_f64() * 1e3)
+                        })
+                        .collect();
+                    on_frame();
+                    Ok(out)
+                },
+            )
+            .collect();
+        let mut out: Vec<ImageFrames> = orbs
+            .iter()
+            .map(|orb| ImageFrames {
+                orb: orb.clone(),
+                frames: Vec::with_capacity(frames.len()),
+            })
+            .collect();
+        for f in per_frame {
+            for (seq, x) in out.iter_mut().zip(f?) {
+                seq.frames.push(x);
+            }
+        }
+        Ok(out)
+    }
+
+    /// The features of a perturbed copy of the sequence whose images are these frames'
+    /// (depth-only and time perturbations): output frame `i` shows input frame `source(i)`,
+    /// with the depth and stamp `frames` reads. The same bits as extracting the perturbed
+    /// frames; each frame is charged its original extraction time.
+    pub fn attach(
+        &self,
+        frames: &FrameReader,
+        source: impl Fn(usize) -> usize + Sync,
+        camera: &Camera,
+        on_frame: impl Fn() + Sync,
+    ) -> Result<ExtractedSequence, DatasetError> {
+        let out: Vec<Result<ExtractedFrame, DatasetError>> = (0..frames.len())
+            .into_par_iter()
+            .map(|i| {
+                let input = frames.read(i)?;
+                let (frame, ms) = &self.frames[source(i)];
+                let features =
+                    slam_core::frame::features_with_depth(frame, input.depth.as_deref(), camera);
+                on_frame();
+                Ok(ExtractedFrame {
+                    timestamp: input.timestamp,
+                    features: Arc::new(features),
+                    extraction_ms: *ms,
+                })
+            })
+            .collect();
+        Ok(ExtractedSequence {
+            orb: self.orb.clone(),
+            frames: out.into_iter().collect::<Result<_, _>>()?,
+        })
+    }
+}
+
+/// `frames` read through a memory of every frame read so far, when the decoded sequence fits
+/// in `budget_bytes` (else `frames` as it is): the perturbation points of a sweep read the same
+/// input frames once each instead of decoding (or rendering) them again per point.
+pub fn remembering(
+    frames: FrameReader,
+    bytes_per_frame: usize,
+    budget_bytes: usize,
+) -> FrameReader {
+    if frames.len().saturating_mul(bytes_per_frame) > budget_bytes {
+        return frames;
+    }
+    let memory: Arc<Vec<std::sync::OnceLock<FrameInput>>> = Arc::new(
+        (0..frames.len())
+            .map(|_| std::sync::OnceLock::new())
+            .collect(),
+    );
+    FrameReader::new(frames.len(), move |i| {
+        if let Some(f) = memory[i].get() {
+            return Ok(f.clone());
+        }
+        let f = frames.read(i)?;
+        Ok(memory[i].get_or_init(|| f).clone())
+    })
+}
+
 /// Frame `i` of `n` read by `read`, extracted once per ORB setting, in parallel over frames.
 fn extract_each(
     n: usize,

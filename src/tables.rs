@@ -373,7 +373,7 @@ fn external_notes(records: &[RunRecord], systems: &[(String, String)]) -> String
     out.join(" ")
 }
 
-fn column_name(k: ConfigKind) -> &'static str {
+pub(crate) fn column_name(k: ConfigKind) -> &'static str {
     match k {
         ConfigKind::Orb => "ORB-SLAM2",
         ConfigKind::Mcor => "w/ MC-OR",
@@ -663,6 +663,10 @@ mod tests {
             reason: None,
             peak_rss_mb: None,
             cpu_s: None,
+            perturbation: None,
+            perturb_family: None,
+            perturb_level: None,
+            perturb_seed: None,
         }
     }
 

@@ -163,3 +163,150 @@ fn bad_perturbations_are_refused_before_anything_runs() {
         assert!(text.contains(f), "{text}");
     }
 }
+
+/// (sequence, config, perturbation, seed) -> column -> value of a sweep's runs.csv.
+fn records(dir: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
+    let mut rdr = csv::Reader::from_path(dir.join("runs.csv")).expect("runs.csv");
+    let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
+    rdr.records()
+        .map(|r| {
+            header
+                .iter()
+                .cloned()
+                .zip(r.unwrap().iter().map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+const SELF_COMMAND: &str = r#"["{noisefree}", "run", "--path", "{sequence}", "--camera", "{settings}", "--seed", "{seed}", "--frames", "{frames}", "--out", "{run_dir}/out", "--quiet"]"#;
+
+#[test]
+fn a_perturbation_sweep_records_every_point_and_external_systems_get_the_perturbed_folder() {
+    let dir = tmpdir("perturb-sweep");
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = dir.join("systems.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[systems.self]\nlabel = \"noisefree (external)\"\nsettings = \"orbslam2\"\n\
+             timeout_s = 600\n[systems.self.rgbd]\ncommand = {SELF_COMMAND}\n\
+             trajectory = \"out/trajectory.txt\"\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join("sweep");
+    let (out_s, cfg_s) = (out.to_str().unwrap(), cfg.to_str().unwrap());
+    let sweep = [
+        "sweep",
+        "--seq",
+        "kinect",
+        "--frames",
+        "40",
+        "--runs",
+        "1",
+        "--configs",
+        "orb,self",
+        "--config",
+        cfg_s,
+        "--perturb",
+        "depth-axial:0,4",
+        "--perturb",
+        "image-noise:0,6",
+        "--perturb",
+        "frame-drop:2",
+        "--out",
+        out_s,
+    ];
+    let first = noisefree_ok(&sweep);
+    let err = String::from_utf8_lossy(&first.stderr);
+    assert!(
+        err.contains("ORB of the unperturbed frames reused"),
+        "depth-only and time points reuse the unperturbed ORB: {err}"
+    );
+    let recs = records(&out);
+    // 4 points (none, depth-axial:4, image-noise:6, frame-drop:2) x 2 systems.
+    assert_eq!(recs.len(), 8, "{recs:?}");
+    for point in ["none", "depth-axial:4", "image-noise:6", "frame-drop:2"] {
+        let at = |c: &str| {
+            recs.iter()
+                .find(|r| r["config"] == c && r["perturbation"] == point)
+                .unwrap_or_else(|| panic!("{c} at {point}"))
+        };
+        let (ours, theirs) = (at("orb"), at("self"));
+        assert!(!ours["ate_rmse"].is_empty());
+        assert_eq!(ours["ate_rmse"], theirs["ate_rmse"], "{point}: bit for bit");
+        assert_eq!(
+            ours["frames"],
+            if point == "frame-drop:2" { "20" } else { "40" }
+        );
+    }
+    let axial = recs
+        .iter()
+        .find(|r| r["perturbation"] == "depth-axial:4")
+        .unwrap();
+    assert_eq!(axial["perturb_family"], "depth-axial");
+    assert_eq!(axial["perturb_level"], "4.0");
+    // The internal run of a point equals `run --perturb` of it.
+    let r = dir.join("run");
+    noisefree_ok(&[
+        "run",
+        "--seq",
+        "kinect",
+        "--frames",
+        "40",
+        "--perturb",
+        "depth-axial:4",
+        "--quiet",
+        "--out",
+        r.to_str().unwrap(),
+    ]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(r.join("summary.json")).unwrap()).unwrap();
+    let ours = recs
+        .iter()
+        .find(|r| r["config"] == "orb" && r["perturbation"] == "depth-axial:4")
+        .unwrap();
+    assert_eq!(
+        ours["ate_rmse"].parse::<f64>().unwrap(),
+        s["ate_rmse_m"].as_f64().unwrap()
+    );
+    // Resumed: nothing runs again.
+    let again = noisefree_ok(&sweep);
+    assert!(String::from_utf8_lossy(&again.stderr).contains("0 runs finished"));
+    assert_eq!(records(&out).len(), 8);
+    // Tables: one resilience table (Markdown + tidy CSV) and figure per family.
+    noisefree_ok(&["table", out_s]);
+    for f in ["depth-axial", "image-noise", "frame-drop"] {
+        let md = std::fs::read_to_string(out.join(format!("resilience-{f}.md"))).unwrap();
+        assert!(
+            md.contains("noisefree (external)") && md.contains("breaking level"),
+            "{md}"
+        );
+        assert!(out
+            .join(format!("figures/resilience_{f}_kinect.png"))
+            .is_file());
+    }
+    let t3 = std::fs::read_to_string(out.join("table3.md")).unwrap();
+    assert!(t3.contains("kinect"), "{t3}");
+    // A depth axis over a stereo sequence is refused before any run.
+    let bad = dir.join("bad");
+    assert_clean_failure(
+        &noisefree(&[
+            "sweep",
+            "--seq",
+            "kinect,stereo",
+            "--frames",
+            "20",
+            "--runs",
+            "1",
+            "--perturb",
+            "depth-lateral:0,2",
+            "--out",
+            bad.to_str().unwrap(),
+        ]),
+        "depth-lateral does not apply to stereo, a stereo sequence",
+    );
+    assert!(!bad.join("runs.csv").exists() || records(&bad).is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}

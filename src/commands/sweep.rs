@@ -4,9 +4,12 @@
 
 use crate::config_file::{base_config, overlay_file};
 use crate::external::system::{systems_in_file, SystemDef};
-use crate::runner::{run_extracted, ExtractedSequence};
+use crate::runner::{remembering, run_extracted, ExtractedSequence, ImageFrames};
 use crate::select::{open, LoadOptions, Source};
-use crate::sweep::plan::{expand, parse_values, ConfigKind, Grids, Job, RunConfig, Shard};
+use crate::sweep::plan::{
+    expand, parse_values, perturbation_points, with_perturbations, ConfigKind, Grids, Job,
+    RunConfig, Shard,
+};
 use crate::sweep::store::{pin_settings, FolderSettings, RunRecord, RunStore};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{write_atomic, write_tum};
@@ -121,6 +124,23 @@ pub struct SweepArgs {
     /// it a resumed sweep keeps every recorded run, failed ones included.
     #[arg(long = "retry-failed")]
     pub retry_failed: bool,
+    /// A perturbation axis, repeatable: `family:LEVELS` with LEVELS a list (`depth-axial:0,1,2,4,8`)
+    /// or a range (`image-noise:0:20:5`). Each axis is swept with the others at level 0 (one
+    /// resilience curve per family); every axis' level 0 is one shared, unperturbed point.
+    /// Families, units and ranges: `noisefree perturb --list`.
+    #[arg(long = "perturb", value_name = "FAMILY:LEVELS")]
+    pub perturb: Vec<String>,
+    /// A perturbation applied under every point of the sweep (`occluders:2`, or a chain
+    /// `depth-axial:1+exposure:5`), the axes' members added after it.
+    #[arg(long = "perturb-with", value_name = "CHAIN")]
+    pub perturb_with: Option<String>,
+    /// Seed of the perturbations' random draws (every run of a point sees one perturbed copy).
+    #[arg(long = "perturb-seed", default_value_t = 0, value_name = "S")]
+    pub perturb_seed: u64,
+    /// Run k of a point draws its own perturbation (seed --perturb-seed + k), so the spread
+    /// over runs includes the perturbation's draws; features are then extracted per run.
+    #[arg(long = "perturb-per-run")]
+    pub perturb_per_run: bool,
     /// Stop after this many runs have finished in this invocation (for testing resumption).
     #[arg(long = "max-runs", value_name = "N", hide = true)]
     pub max_runs: Option<usize>,
@@ -260,7 +280,20 @@ pub fn run(args: SweepArgs) -> Result<()> {
         None => Shard::from_slurm(|k| std::env::var(k).ok())?,
     };
     let labels: Vec<String> = srcs.iter().map(Source::label).collect();
-    let mut all_jobs = expand(&labels, &kinds, &grids, args.runs);
+    // Perturbation axes, checked before anything runs.
+    let axes: Vec<perturb::Axis> = args
+        .perturb
+        .iter()
+        .map(|a| perturb::Axis::parse(a).with_context(|| format!("--perturb {a}")))
+        .collect::<Result<_>>()?;
+    let with = perturb::Chain::parse(args.perturb_with.as_deref().unwrap_or(""))
+        .context("--perturb-with")?;
+    let points = perturbation_points(&axes, &with, args.perturb_seed);
+    let mut all_jobs = with_perturbations(
+        expand(&labels, &kinds, &grids, args.runs),
+        &points,
+        args.perturb_per_run,
+    );
     for job in &mut all_jobs {
         let synthetic = catalog
             .get(&job.sequence)
@@ -388,6 +421,17 @@ pub fn run(args: SweepArgs) -> Result<()> {
         synth_without: args.synth_without.clone(),
         camera: None,
     };
+    // A perturbation that does not fit a sequence's sensor is refused before any run.
+    if !points.is_empty() {
+        for (src, label) in srcs.iter().zip(&labels) {
+            let (seq, _) = open(src, &catalog, &load_opts)?;
+            for p in &points {
+                perturb::Chain::parse(&p.chain)?
+                    .check_sensor(seq.camera.sensor, label)
+                    .context("--perturb")?;
+            }
+        }
+    }
     let started = Instant::now();
     let finished = std::sync::atomic::AtomicUsize::new(0);
     let started_runs = std::sync::atomic::AtomicUsize::new(0);
@@ -411,7 +455,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 synth_seed: synth_seed.unwrap_or(args.synth_seed),
                 ..load_opts.clone()
             };
-            let (seq, frames) = open(src, &catalog, &opts)?;
+            let (seq, base_frames) = open(src, &catalog, &opts)?;
             if let Some(gt) = &seq.groundtruth {
                 // The figures draw seed 0; its realization's ground truth goes beside it.
                 if jobs.iter().any(|j| j.seed == 0) {
@@ -425,38 +469,24 @@ pub fn run(args: SweepArgs) -> Result<()> {
                     )?;
                 }
             }
-            // External systems' runs first: each a child process on the sequence on disk.
-            let (jobs, theirs): (Vec<&Job>, Vec<&Job>) =
-                jobs.into_iter().partition(|j| j.config.kind().is_some());
-            if !theirs.is_empty() {
-                run_external_jobs(
-                    &theirs,
-                    &systems,
-                    ExternalContext {
-                        source: src,
-                        seq: &seq,
-                        frames: frames.len(),
-                        catalog: &catalog,
-                        opts: &opts,
-                        cache: &cache,
-                        out: &args.out,
-                        store: &store,
-                    },
-                    &pool,
-                    &multi,
-                    || {
-                        // Reserve a slot first, so parallel runs never overshoot --max-runs.
-                        started_runs.fetch_add(1, Ordering::SeqCst) < max_runs
-                    },
-                    || {
-                        finished.fetch_add(1, Ordering::SeqCst);
-                        overall.inc(1);
-                    },
-                )?;
+            // The perturbation points of this realization, in job order (one point, `None`,
+            // in a sweep without perturbations).
+            let mut by_point: Vec<(PointKey, Vec<&Job>)> = Vec::new();
+            for j in jobs {
+                let key = j.perturbation.as_ref().map(|p| (p.chain.clone(), p.seed));
+                match by_point.iter_mut().find(|(k, _)| *k == key) {
+                    Some((_, v)) => v.push(j),
+                    None => by_point.push((key, vec![j])),
+                }
             }
-            if jobs.is_empty() {
-                continue;
-            }
+            let perturbed_sweep = by_point.iter().any(|(k, _)| k.is_some());
+            // Several points read the same input frames: decode (or render) each once.
+            let base_frames = if by_point.len() > 1 {
+                let (w, h) = (seq.camera.width as usize, seq.camera.height as usize);
+                remembering(base_frames, w * h * 5, FRAME_MEMORY_BUDGET)
+            } else {
+                base_frames
+            };
             let mut base = base_config(seq.camera.sensor);
             if let Some(p) = &args.config {
                 base = overlay_file(&base, p)?;
@@ -467,82 +497,219 @@ pub fn run(args: SweepArgs) -> Result<()> {
             if args.no_loop_closing {
                 base.loop_closing.enabled = false;
             }
-            // Every frame's features once for each set of ORB settings the runs use, shared
-            // read-only by the runs; frames are read (or rendered) and extracted as they go,
-            // so the decoded sequence never sits in memory.
-            let mut orbs: Vec<OrbConfig> = Vec::new();
-            for job in &jobs {
-                let orb = job_config(&base, job).orb;
-                if !orbs.contains(&orb) {
-                    orbs.push(orb);
+            // Every ORB setting our runs of this realization use, over all its points.
+            let mut all_orbs: Vec<OrbConfig> = Vec::new();
+            for (_, js) in &by_point {
+                for job in js.iter().filter(|j| j.config.kind().is_some()) {
+                    let orb = job_config(&base, job).orb;
+                    if !all_orbs.contains(&orb) {
+                        all_orbs.push(orb);
+                    }
                 }
             }
-            let t_extract = Instant::now();
-            let fbar = multi.add(ProgressBar::new(frames.len() as u64));
-            fbar.set_style(
-                ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} frames")
-                    .expect("static template")
-                    .progress_chars("=> "),
-            );
-            fbar.set_prefix(format!("{label} features"));
-            let extracted = pool
-                .install(|| {
-                    ExtractedSequence::extract_all(&frames, &seq.camera, &orbs, || fbar.inc(1))
-                })
-                .with_context(|| format!("reading the frames of {label}"))?;
-            fbar.finish_and_clear();
-            drop(frames);
-            if !args.quiet {
-                let n: usize = extracted.iter().map(|e| e.frames.len()).sum();
-                let bytes: usize = extracted.iter().map(ExtractedSequence::heap_bytes).sum();
-                let cpu: f64 = extracted.iter().map(ExtractedSequence::extraction_s).sum();
-                // Printed even when stderr is not a terminal (indicatif then hides its own lines).
-                multi.suspend(|| {
-                    eprintln!(
-                        "{label}: features of {n} frames in {:.1} s ({cpu:.1} s of one core, \
-                         {:.0} KB per frame, shared by {} runs)",
-                        t_extract.elapsed().as_secs_f64(),
-                        bytes as f64 / 1024.0 / n.max(1) as f64,
-                        jobs.len()
-                    )
-                });
-            }
-            let bar = multi.add(ProgressBar::new(jobs.len() as u64));
-            bar.set_style(
-                ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} runs")
-                    .expect("static template")
-                    .progress_chars("=> "),
-            );
-            bar.set_prefix(match synth_seed {
-                Some(s) if args.vary_sequence => format!("{label} s{s}"),
-                _ => label.clone(),
-            });
-            let results: Vec<Result<()>> = pool.install(|| {
-                jobs.par_iter()
-                    .map(|job| {
-                        // Reserve a slot first, so parallel runs never overshoot --max-runs.
-                        if started_runs.fetch_add(1, Ordering::SeqCst) >= max_runs {
-                            return Ok(());
-                        }
-                        let rec = run_job(
-                            &seq,
-                            &extracted,
-                            &base,
-                            vocabulary.vocabulary.as_ref(),
-                            job,
-                            &args.out,
+            // ORB of the unperturbed frames, extracted once on first use by a depth-only or
+            // time point and shared by all of them.
+            let mut image_frames: Option<Vec<ImageFrames>> = None;
+            for (point, jobs) in by_point {
+                if started_runs.load(Ordering::SeqCst) >= max_runs {
+                    break;
+                }
+                let (chain, pseed) = match &point {
+                    Some((c, s)) => (perturb::Chain::parse(c)?, *s),
+                    None => (perturb::Chain::default(), 0),
+                };
+                let (pseq, frames) =
+                    perturb::perturb_sequence(&seq, base_frames.clone(), &chain, pseed)
+                        .with_context(|| format!("perturbing {label} by {chain}"))?;
+                let what = if perturbed_sweep {
+                    format!("{label} [{chain}]")
+                } else {
+                    label.clone()
+                };
+                // External systems' runs first: each a child process on the sequence on disk
+                // (a perturbed sequence written once to the cache).
+                let (jobs, theirs): (Vec<&Job>, Vec<&Job>) =
+                    jobs.into_iter().partition(|j| j.config.kind().is_some());
+                if !theirs.is_empty() {
+                    let perturbed_src;
+                    let source = if chain.is_identity() {
+                        src
+                    } else {
+                        let folder = perturbed_folder(
+                            &cache, src, &catalog, &opts, &pseq, &frames, &chain, pseed, &multi,
                         )?;
-                        store.append(&rec)?;
-                        finished.fetch_add(1, Ordering::SeqCst);
-                        bar.inc(1);
-                        overall.inc(1);
-                        Ok(())
+                        perturbed_src = Source::Path(folder);
+                        &perturbed_src
+                    };
+                    run_external_jobs(
+                        &theirs,
+                        &systems,
+                        ExternalContext {
+                            source,
+                            seq: &pseq,
+                            frames: frames.len(),
+                            catalog: &catalog,
+                            opts: &opts,
+                            cache: &cache,
+                            out: &args.out,
+                            store: &store,
+                        },
+                        &pool,
+                        &multi,
+                        || {
+                            // Reserve a slot first, so parallel runs never overshoot --max-runs.
+                            started_runs.fetch_add(1, Ordering::SeqCst) < max_runs
+                        },
+                        || {
+                            finished.fetch_add(1, Ordering::SeqCst);
+                            overall.inc(1);
+                        },
+                    )?;
+                }
+                if jobs.is_empty() {
+                    continue;
+                }
+                // Every frame's features once for each set of ORB settings the runs use,
+                // shared read-only by the runs; frames are read (or rendered) and extracted as
+                // they go, so the decoded sequence never sits in memory.
+                let mut orbs: Vec<OrbConfig> = Vec::new();
+                for job in &jobs {
+                    let orb = job_config(&base, job).orb;
+                    if !orbs.contains(&orb) {
+                        orbs.push(orb);
+                    }
+                }
+                let t_extract = Instant::now();
+                let fbar = multi.add(ProgressBar::new(frames.len() as u64));
+                fbar.set_style(
+                    ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} frames")
+                        .expect("static template")
+                        .progress_chars("=> "),
+                );
+                fbar.set_prefix(format!("{label} features"));
+                // Depth-only and time perturbations keep the images: their ORB is that of the
+                // unperturbed frames, attached to each point's depth and stamps.
+                let reuse = perturbed_sweep
+                    && chain.effective().0.iter().all(|p| {
+                        matches!(
+                            p.family.domain(),
+                            perturb::Domain::Depth | perturb::Domain::Time
+                        )
+                    });
+                let mut how = "extracted";
+                let extracted = if reuse {
+                    if image_frames.is_none() {
+                        let ibar = multi.add(ProgressBar::new(base_frames.len() as u64));
+                        ibar.set_style(fbar.style());
+                        ibar.set_prefix(format!("{label} ORB"));
+                        image_frames = Some(
+                            pool.install(|| {
+                                ImageFrames::extract_all(
+                                    &base_frames,
+                                    &seq.camera,
+                                    &all_orbs,
+                                    || ibar.inc(1),
+                                )
+                            })
+                            .with_context(|| format!("reading the frames of {label}"))?,
+                        );
+                        ibar.finish_and_clear();
+                    } else {
+                        how = "reused";
+                    }
+                    let perturber = perturb::Perturber::new(
+                        &chain,
+                        &seq.camera,
+                        seq.depth_factor
+                            .unwrap_or(perturb::apply::DEFAULT_DEPTH_UNITS),
+                        pseed,
+                        base_frames.len(),
+                        label,
+                    )?;
+                    let image = image_frames.as_ref().expect("extracted above");
+                    pool.install(|| {
+                        orbs.iter()
+                            .map(|orb| {
+                                let imf = image
+                                    .iter()
+                                    .find(|f| &f.orb == orb)
+                                    .expect("every ORB setting of the realization");
+                                imf.attach(
+                                    &frames,
+                                    |i| perturber.source(i),
+                                    &seq.camera,
+                                    || fbar.inc(1),
+                                )
+                            })
+                            .collect::<Result<Vec<_>, _>>()
                     })
-                    .collect()
-            });
-            bar.finish_and_clear();
-            for r in results {
-                r?;
+                    .with_context(|| format!("reading the frames of {what}"))?
+                } else {
+                    pool.install(|| {
+                        ExtractedSequence::extract_all(&frames, &seq.camera, &orbs, || fbar.inc(1))
+                    })
+                    .with_context(|| format!("reading the frames of {what}"))?
+                };
+                fbar.finish_and_clear();
+                drop(frames);
+                if !args.quiet {
+                    let n: usize = extracted.iter().map(|e| e.frames.len()).sum();
+                    let bytes: usize = extracted.iter().map(ExtractedSequence::heap_bytes).sum();
+                    let cpu: f64 = extracted.iter().map(ExtractedSequence::extraction_s).sum();
+                    let note = if reuse {
+                        format!(
+                            "ORB of the unperturbed frames {how} ({cpu:.1} s of one core once per sequence), depth and stamps attached"
+                        )
+                    } else {
+                        format!("{cpu:.1} s of one core")
+                    };
+                    // Printed even when stderr is not a terminal (indicatif then hides its own lines).
+                    multi.suspend(|| {
+                        eprintln!(
+                            "{what}: features of {n} frames in {:.1} s ({note}, {:.0} KB per frame, shared by {} runs)",
+                            t_extract.elapsed().as_secs_f64(),
+                            bytes as f64 / 1024.0 / n.max(1) as f64,
+                            jobs.len()
+                        )
+                    });
+                }
+                let bar = multi.add(ProgressBar::new(jobs.len() as u64));
+                bar.set_style(
+                    ProgressStyle::with_template("{prefix:>16} [{bar:40}] {pos}/{len} runs")
+                        .expect("static template")
+                        .progress_chars("=> "),
+                );
+                bar.set_prefix(match synth_seed {
+                    Some(s) if args.vary_sequence => format!("{what} s{s}"),
+                    _ => what.clone(),
+                });
+                let results: Vec<Result<()>> = pool.install(|| {
+                    jobs.par_iter()
+                        .map(|job| {
+                            // Reserve a slot first, so parallel runs never overshoot --max-runs.
+                            if started_runs.fetch_add(1, Ordering::SeqCst) >= max_runs {
+                                return Ok(());
+                            }
+                            let rec = run_job(
+                                &pseq,
+                                &extracted,
+                                &base,
+                                vocabulary.vocabulary.as_ref(),
+                                job,
+                                &args.out,
+                            )?;
+                            store.append(&rec)?;
+                            finished.fetch_add(1, Ordering::SeqCst);
+                            bar.inc(1);
+                            overall.inc(1);
+                            Ok(())
+                        })
+                        .collect()
+                });
+                bar.finish_and_clear();
+                for r in results {
+                    r?;
+                }
             }
         }
     }
@@ -680,7 +847,7 @@ fn run_job(
     let o = run_extracted(seq, features, &cfg, vocabulary, |_| {});
     let dir = out
         .join("trajectories")
-        .join(&job.sequence)
+        .join(job.sequence_folder())
         .join(job_tag(job));
     let est = match &seq.t_bs {
         Some(t_bs) => o.trajectory.cam_to_body(t_bs),
@@ -695,6 +862,7 @@ fn run_job(
         write_atomic(&dir.join("frames_seed0.csv"), &w.into_inner()?)?;
     }
     let (mean_inliers, mean_outliers) = o.mean_inliers_outliers();
+    let (perturbation, perturb_family, perturb_level, perturb_seed) = job.perturbation_columns();
     Ok(RunRecord {
         sequence: job.sequence.clone(),
         config: job.config.name().to_string(),
@@ -718,7 +886,77 @@ fn run_job(
         reason: None,
         peak_rss_mb: None,
         cpu_s: None,
+        perturbation,
+        perturb_family,
+        perturb_level,
+        perturb_seed,
     })
+}
+
+/// A perturbation point of a realization: (chain, perturbation seed), `None` without one.
+type PointKey = Option<(String, u64)>;
+
+/// Decoded frames a sweep may keep in memory to read them once for all its perturbation points.
+const FRAME_MEMORY_BUDGET: usize = 3 << 30;
+
+/// Writes a perturbed sequence once into the cache (TUM or EuRoC layout) for external systems,
+/// and returns its folder; another shard may have written it first.
+#[allow(clippy::too_many_arguments)]
+fn perturbed_folder(
+    cache: &Path,
+    src: &Source,
+    catalog: &Catalog,
+    opts: &LoadOptions,
+    seq: &datasets::Sequence,
+    frames: &datasets::FrameReader,
+    chain: &perturb::Chain,
+    seed: u64,
+    multi: &MultiProgress,
+) -> Result<PathBuf> {
+    let safe = |s: &str| -> String {
+        s.chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "-.".contains(c) {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect()
+    };
+    let realization = match src {
+        Source::Catalog(name) if catalog.get(name).is_ok_and(|e| e.preset.is_some()) => {
+            format!("-seed{}", opts.synth_seed)
+        }
+        _ => String::new(),
+    };
+    let folder = cache.join("sequences").join(format!(
+        "{}{realization}-{}f-{}-ps{seed}",
+        safe(&src.label()),
+        frames.len(),
+        safe(&chain.to_string())
+    ));
+    if !folder.is_dir() {
+        let source_dir = crate::external::export::source_folder(src, catalog, opts)?;
+        let note = format!(
+            "source {}\nperturbation {chain}\nperturbation_seed {seed}\nframes {}",
+            src.label(),
+            frames.len()
+        );
+        multi.suspend(|| {
+            eprintln!(
+                "writing {} perturbed by {chain} for external systems to {}",
+                src.label(),
+                folder.display()
+            )
+        });
+        let written =
+            perturb::write_folder(seq, frames, &folder, &note, source_dir.as_deref(), |_| {});
+        if !folder.is_dir() {
+            written.with_context(|| format!("writing {}", folder.display()))?;
+        }
+    }
+    Ok(folder)
 }
 
 /// Whether a folder looks like a sweep output (has a runs*.csv).

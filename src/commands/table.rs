@@ -31,7 +31,20 @@ fn write_table(dir: &Path, stem: &str, t: &Rendered) -> Result<()> {
 
 /// Writes every table of one sweep folder; returns the combined Markdown.
 pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> {
-    let records = load_dir(dir)?;
+    let all_records = load_dir(dir)?;
+    // A perturbation sweep: the paper's tables from its unperturbed point (or, with
+    // --perturb-with and no axis, from its one point), the resilience tables from the rest.
+    let perturbed = all_records.iter().any(|r| r.perturbation.is_some());
+    let records: Vec<_> = if perturbed {
+        let zero: Vec<_> = all_records
+            .iter()
+            .filter(|r| r.perturbation.is_none() || r.perturb_family.is_none())
+            .cloned()
+            .collect();
+        zero
+    } else {
+        all_records.clone()
+    };
     let mut all = format!(
         "# Tables of {}\n\n{} runs recorded.\n\n",
         dir.display(),
@@ -64,9 +77,61 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         all.push('\n');
         all.push_str(&g.markdown);
     }
+    if perturbed {
+        let curves = crate::resilience::curves(&all_records, &labels);
+        for (family, list) in &curves {
+            let t = crate::resilience::table(family, list);
+            write_table(dir, &format!("resilience-{family}"), &t)?;
+            all.push('\n');
+            all.push_str(&t.markdown);
+            resilience_figures(dir, family, list)?;
+        }
+    }
     write_atomic(&dir.join("tables.md"), all.as_bytes())?;
     figures_for(dir, &records)?;
     Ok(all)
+}
+
+/// One figure per sequence of a family's curves: `figures/resilience_<family>_<sequence>`.
+fn resilience_figures(dir: &Path, family: &str, curves: &[crate::resilience::Curve]) -> Result<()> {
+    let mut sequences: Vec<&str> = curves.iter().map(|c| c.sequence.as_str()).collect();
+    sequences.dedup();
+    let unit = perturb::Family::parse(family).map_or("", perturb::Family::unit);
+    for seq in sequences {
+        let lines: Vec<crate::figures::ResilienceCurve> = curves
+            .iter()
+            .filter(|c| c.sequence == seq)
+            .map(|c| {
+                let label = match c.breaking_level() {
+                    Some(b) => format!("{} (breaks at {b})", c.label),
+                    None => c.label.clone(),
+                };
+                let pts = c
+                    .levels
+                    .iter()
+                    .map(|l| {
+                        let v = (!l.is_failure()).then(|| {
+                            (
+                                l.mean().unwrap_or(0.0),
+                                l.ates.first().copied().unwrap_or(0.0),
+                                l.ates.last().copied().unwrap_or(0.0),
+                            )
+                        });
+                        (l.level, v)
+                    })
+                    .collect();
+                (label, pts)
+            })
+            .collect();
+        crate::figures::resilience(
+            &dir.join("figures")
+                .join(format!("resilience_{family}_{seq}")),
+            &format!("{seq}: ATE against {family}"),
+            &format!("{family} level ({unit}); x: more than half the runs failed"),
+            &lines,
+        )?;
+    }
+    Ok(())
 }
 
 /// Folders of `dir`, sorted by name.

@@ -89,7 +89,7 @@ pub fn run_job(
     job: &Job,
     out: &Path,
 ) -> Result<RunRecord> {
-    let dir = run_dir(out, &job.sequence, &system.name, job.seed);
+    let dir = run_dir(out, &job.sequence_folder(), &system.name, job.seed);
     if dir.exists() {
         std::fs::remove_dir_all(&dir).with_context(|| format!("clearing {}", dir.display()))?;
     }
@@ -215,6 +215,7 @@ pub fn run_job(
     let failed = reason.is_some()
         || (ate.is_none() && seq.groundtruth.is_some())
         || (tracked as f64) < MIN_TRACKED_FRACTION * frames as f64;
+    let (perturbation, perturb_family, perturb_level, perturb_seed) = job.perturbation_columns();
     Ok(RunRecord {
         sequence: job.sequence.clone(),
         config: system.name.clone(),
@@ -242,6 +243,10 @@ pub fn run_job(
         reason,
         peak_rss_mb: Some(finished.peak_rss_bytes as f64 / 1e6),
         cpu_s: Some(finished.cpu_s),
+        perturbation,
+        perturb_family,
+        perturb_level,
+        perturb_seed,
     })
 }
 

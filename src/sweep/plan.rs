@@ -189,19 +189,179 @@ pub struct Job {
     /// Synthetic sequences: the seed of the sequence realization (scene textures and noise);
     /// `None` for real sequences.
     pub synth_seed: Option<u64>,
+    /// The perturbation of the sequence (`sweep --perturb`); `None` in a sweep without one.
+    pub perturbation: Option<PerturbPoint>,
 }
 
 impl Job {
     /// The identity of a run in `runs.csv`: a re-run with the same key is skipped.
     pub fn key(&self) -> String {
-        run_key(
+        let mut k = run_key(
             &self.sequence,
             self.config.name(),
             &self.params,
             self.seed,
             self.synth_seed,
-        )
+        );
+        if let Some(p) = &self.perturbation {
+            k += &perturbation_key(&p.chain, p.seed);
+        }
+        k
     }
+}
+
+/// A job's perturbation as `runs.csv` columns: (perturbation, perturb_family, perturb_level,
+/// perturb_seed).
+pub type PerturbColumns = (Option<String>, Option<String>, Option<f64>, Option<u64>);
+
+impl Job {
+    /// The folder of the job's sequence under `trajectories/` or `external/`: the sequence, and
+    /// for a perturbed sweep a subfolder per perturbation (`kinect/depth-axial_2-ps0`).
+    pub fn sequence_folder(&self) -> String {
+        match &self.perturbation {
+            None => self.sequence.clone(),
+            Some(p) => {
+                let safe: String = p
+                    .chain
+                    .chars()
+                    .map(|c| {
+                        if c.is_ascii_alphanumeric() || "-.".contains(c) {
+                            c
+                        } else {
+                            '_'
+                        }
+                    })
+                    .collect();
+                format!("{}/{safe}-ps{}", self.sequence, p.seed)
+            }
+        }
+    }
+
+    /// The job's perturbation as `runs.csv` columns (all empty without one).
+    pub fn perturbation_columns(&self) -> PerturbColumns {
+        match &self.perturbation {
+            None => (None, None, None, None),
+            Some(p) => (
+                Some(p.chain.clone()),
+                p.family.clone(),
+                p.level,
+                Some(p.seed),
+            ),
+        }
+    }
+}
+
+/// One point of a sweep's perturbation axes: the chain applied to the sequence, and which axis
+/// member it measures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PerturbPoint {
+    /// The chain actually applied, canonical (`depth-axial:2`, `occluders:1+depth-axial:2`,
+    /// `none`).
+    pub chain: String,
+    /// The family of the axis this point belongs to; `None` for the unperturbed point (every
+    /// axis' level 0, shared by all of them).
+    pub family: Option<String>,
+    /// The axis level; `None` for the unperturbed point.
+    pub level: Option<f64>,
+    /// Seed of the perturbation's draws.
+    pub seed: u64,
+}
+
+/// The part of a run's key its perturbation adds (absent in sweeps without one, so their keys
+/// are unchanged).
+pub fn perturbation_key(chain: &str, seed: u64) -> String {
+    format!("|p={chain}|ps={seed}")
+}
+
+/// The points of `--perturb` axes over a fixed `--perturb-with` chain: one per level of each
+/// axis (the fixed chain first, then the axis member), points that apply the same chain
+/// merged (every axis' level 0 is the one unperturbed point, listed first).
+pub fn perturbation_points(
+    axes: &[perturb::Axis],
+    with: &perturb::Chain,
+    seed: u64,
+) -> Vec<PerturbPoint> {
+    let mut out: Vec<PerturbPoint> = Vec::new();
+    let base = with.effective().to_string();
+    if axes.is_empty() {
+        if !with.is_identity() {
+            out.push(PerturbPoint {
+                chain: base,
+                family: None,
+                level: None,
+                seed,
+            });
+        }
+        return out;
+    }
+    let mut push = |p: PerturbPoint| {
+        if !out.iter().any(|q| q.chain == p.chain) {
+            out.push(p);
+        }
+    };
+    // The unperturbed point first, when any axis has an identity level.
+    if axes
+        .iter()
+        .any(|a| a.levels.iter().any(|&l| a.family.is_identity(l)))
+    {
+        push(PerturbPoint {
+            chain: base.clone(),
+            family: None,
+            level: None,
+            seed,
+        });
+    }
+    for axis in axes {
+        for &level in &axis.levels {
+            let mut chain = with.clone();
+            chain.0.push(perturb::Perturbation {
+                family: axis.family,
+                level,
+            });
+            let canon = chain.effective().to_string();
+            if canon == base {
+                continue;
+            }
+            push(PerturbPoint {
+                chain: canon,
+                family: Some(axis.family.name().to_string()),
+                level: Some(level),
+                seed,
+            });
+        }
+    }
+    out
+}
+
+/// Every job of `jobs` once per perturbation point, sequence-major (a sequence's points go
+/// together), then point, then the job order. With `per_run`, run k of a point draws its own
+/// perturbation (seed + k) instead of all runs sharing one perturbed copy.
+pub fn with_perturbations(jobs: Vec<Job>, points: &[PerturbPoint], per_run: bool) -> Vec<Job> {
+    if points.is_empty() {
+        return jobs;
+    }
+    let mut sequences: Vec<String> = Vec::new();
+    for j in &jobs {
+        if !sequences.contains(&j.sequence) {
+            sequences.push(j.sequence.clone());
+        }
+    }
+    let mut out = Vec::new();
+    for s in &sequences {
+        for p in points {
+            for j in jobs.iter().filter(|j| &j.sequence == s) {
+                let mut p = p.clone();
+                if per_run {
+                    p.seed += j.seed;
+                }
+                out.push(Job {
+                    perturbation: Some(p),
+                    ..j.clone()
+                });
+            }
+        }
+    }
+    out
 }
 
 fn fmt_opt(v: Option<f64>) -> String {
@@ -259,6 +419,7 @@ pub fn expand(sequences: &[String], configs: &[RunConfig], grids: &Grids, runs: 
                         },
                         seed,
                         synth_seed: None,
+                        perturbation: None,
                     });
                 }
                 continue;
@@ -300,6 +461,7 @@ pub fn expand(sequences: &[String], configs: &[RunConfig], grids: &Grids, runs: 
                         params: p,
                         seed,
                         synth_seed: None,
+                        perturbation: None,
                     });
                 }
             }
@@ -447,6 +609,47 @@ mod tests {
         assert!(jobs[..27].iter().all(|j| j.sequence == "a"));
         let keys: std::collections::BTreeSet<String> = jobs.iter().map(Job::key).collect();
         assert_eq!(keys.len(), jobs.len(), "keys are unique");
+    }
+
+    #[test]
+    fn perturbation_points_merge_the_unperturbed_levels_and_multiply_the_jobs() {
+        let axes = vec![
+            perturb::Axis::parse("depth-axial:0,1,2").unwrap(),
+            perturb::Axis::parse("depth-lateral:0,2").unwrap(),
+        ];
+        let pts = perturbation_points(&axes, &perturb::Chain::default(), 7);
+        let chains: Vec<&str> = pts.iter().map(|p| p.chain.as_str()).collect();
+        assert_eq!(
+            chains,
+            ["none", "depth-axial:1", "depth-axial:2", "depth-lateral:2"]
+        );
+        assert_eq!(pts[0].family, None);
+        assert_eq!(pts[2].level, Some(2.0));
+        let with = perturb::Chain::parse("occluders:1").unwrap();
+        let pts = perturbation_points(&axes[..1], &with, 0);
+        assert_eq!(pts[0].chain, "occluders:1");
+        assert_eq!(pts[1].chain, "occluders:1+depth-axial:1");
+        let grids = Grids {
+            tau_mf: vec![0.7],
+            tau_gf: vec![0.7],
+            tau_mg: vec![0.5],
+            baseline: vec![0.09],
+        };
+        let configs = vec![
+            RunConfig::Ours(ConfigKind::Orb),
+            RunConfig::Ours(ConfigKind::Avc),
+        ];
+        let jobs = expand(&["a".into(), "b".into()], &configs, &grids, 2);
+        let pts = perturbation_points(&axes, &perturb::Chain::default(), 5);
+        let all = with_perturbations(jobs.clone(), &pts, false);
+        assert_eq!(all.len(), jobs.len() * 4);
+        assert!(all[..16].iter().all(|j| j.sequence == "a"));
+        let keys: std::collections::BTreeSet<String> = all.iter().map(Job::key).collect();
+        assert_eq!(keys.len(), all.len());
+        // Without perturbations the keys are those of a sweep before they existed.
+        assert_eq!(jobs[0].key(), "a|orb|||||0|");
+        let per_run = with_perturbations(jobs, &pts, true);
+        assert_eq!(per_run[1].perturbation.as_ref().unwrap().seed, 6);
     }
 
     #[test]

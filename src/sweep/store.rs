@@ -4,7 +4,7 @@
 //! open, and a run whose key is already recorded is not run again — so an interrupted sweep
 //! resumes where it stopped and the file never holds a half row.
 
-use super::plan::{run_key, Params, Shard};
+use super::plan::{perturbation_key, run_key, Params, Shard};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use slam_core::system::ClusterViews;
@@ -70,6 +70,19 @@ pub struct RunRecord {
     /// a threaded system.
     #[serde(default)]
     pub cpu_s: Option<f64>,
+    /// The perturbation applied to the sequence (`sweep --perturb`: a chain such as
+    /// `depth-axial:2`, or `none` for the unperturbed point); empty in sweeps without one.
+    #[serde(default)]
+    pub perturbation: Option<String>,
+    /// The perturbation axis this run measures (its family); empty for the unperturbed point.
+    #[serde(default)]
+    pub perturb_family: Option<String>,
+    /// The axis level, in the family's unit; empty for the unperturbed point.
+    #[serde(default)]
+    pub perturb_level: Option<f64>,
+    /// Seed of the perturbation's draws.
+    #[serde(default)]
+    pub perturb_seed: Option<u64>,
 }
 
 impl RunRecord {
@@ -85,13 +98,17 @@ impl RunRecord {
 
     /// The run's identity (same as the job's key).
     pub fn key(&self) -> String {
-        run_key(
+        let mut k = run_key(
             &self.sequence,
             &self.config,
             &self.params(),
             self.seed,
             self.synth_seed,
-        )
+        );
+        if let Some(p) = &self.perturbation {
+            k += &perturbation_key(p, self.perturb_seed.unwrap_or(0));
+        }
+        k
     }
 }
 
@@ -326,6 +343,10 @@ fn header() -> String {
         "reason",
         "peak_rss_mb",
         "cpu_s",
+        "perturbation",
+        "perturb_family",
+        "perturb_level",
+        "perturb_seed",
     ])
     .expect("in-memory write");
     String::from_utf8(w.into_inner().expect("in-memory")).expect("ascii")
@@ -550,6 +571,10 @@ mod tests {
             reason: None,
             peak_rss_mb: None,
             cpu_s: None,
+            perturbation: None,
+            perturb_family: None,
+            perturb_level: None,
+            perturb_seed: None,
         }
     }
 

@@ -63,6 +63,32 @@ pub fn extract_features(
     )
 }
 
+/// A frame's features with its depth measured from `depth` instead of the image it was
+/// extracted with: `frame` extracted without depth (RGB-D), then any number of depth images
+/// attached, each giving the same bits as [`extract_features`] on the frame with that depth.
+/// A sweep over depth-only perturbations extracts ORB once and attaches each level's depth.
+/// Stereo frames (and `depth = None`) keep the depth the frame has.
+pub fn features_with_depth(frame: &Frame, depth: Option<&DepthImage>, camera: &Camera) -> Features {
+    let mut f = Frame {
+        id: frame.id,
+        timestamp: frame.timestamp,
+        keypoints_raw: frame.keypoints_raw.clone(),
+        keypoints: frame.keypoints.clone(),
+        descriptors: frame.descriptors.clone(),
+        depth: frame.depth.clone(),
+        u_right: frame.u_right.clone(),
+        scale: frame.scale.clone(),
+        bounds: frame.bounds,
+        grid: CellGrid::default(),
+    };
+    if camera.sensor == SensorKind::Rgbd {
+        if let Some(d) = depth {
+            f.assign_rgbd_depth(d, camera.bf);
+        }
+    }
+    Features::new(f.keypoints, f.descriptors, f.depth, f.u_right, camera)
+}
+
 impl Frame {
     /// Extracts features from `input` and measures their depth as `camera.sensor` says:
     /// RGB-D reads `input.depth` at each raw keypoint, stereo matches against `input.right`.

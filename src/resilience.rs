@@ -1,0 +1,449 @@
+//! Resilience tables and curves of a perturbation sweep (`sweep --perturb`): per perturbation
+//! family and sequence, each system's ATE (mean ± std over its runs) at every level, and its
+//! **breaking level**: the first level, mildest first, whose mean ATE exceeds
+//! max(2 x its level-0 ATE, level-0 ATE + 1 cm), or where more than half of its runs fail.
+
+use crate::sweep::plan::ConfigKind;
+use crate::sweep::store::RunRecord;
+use crate::tables::{column_name, Rendered};
+use perturb::Family;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// A level's ATE is "broken" above max(BREAK_FACTOR x level-0, level-0 + BREAK_MARGIN_M).
+pub const BREAK_FACTOR: f64 = 2.0;
+/// See [`BREAK_FACTOR`] (metres).
+pub const BREAK_MARGIN_M: f64 = 0.01;
+
+/// The runs of one system at one level.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelStats {
+    /// The level (0 for the unperturbed point).
+    pub level: f64,
+    /// Runs.
+    pub n: usize,
+    /// Failed runs ('F').
+    pub failed: usize,
+    /// ATEs of the runs that did not fail, sorted (m).
+    pub ates: Vec<f64>,
+    /// Mean frames per second.
+    pub fps: f64,
+}
+
+impl LevelStats {
+    /// Mean ATE of the runs that did not fail.
+    pub fn mean(&self) -> Option<f64> {
+        (!self.ates.is_empty()).then(|| self.ates.iter().sum::<f64>() / self.ates.len() as f64)
+    }
+
+    /// Population standard deviation of those ATEs.
+    pub fn std(&self) -> Option<f64> {
+        let m = self.mean()?;
+        Some(
+            (self.ates.iter().map(|a| (a - m).powi(2)).sum::<f64>() / self.ates.len() as f64)
+                .sqrt(),
+        )
+    }
+
+    /// Median of those ATEs.
+    pub fn median(&self) -> Option<f64> {
+        let n = self.ates.len();
+        (n > 0).then(|| {
+            if n % 2 == 1 {
+                self.ates[n / 2]
+            } else {
+                0.5 * (self.ates[n / 2 - 1] + self.ates[n / 2])
+            }
+        })
+    }
+
+    /// More than half of the runs failed (or none gave an ATE).
+    pub fn is_failure(&self) -> bool {
+        self.ates.is_empty() || 2 * self.failed > self.n
+    }
+}
+
+/// One system's curve along one family on one sequence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Curve {
+    /// The sequence.
+    pub sequence: String,
+    /// The configuration key (`orb`, `mcor+avc`, an external system's name).
+    pub system: String,
+    /// Its heading.
+    pub label: String,
+    /// Its levels, mildest first (level 0 first).
+    pub levels: Vec<LevelStats>,
+}
+
+impl Curve {
+    /// The breaking level: the first level after 0 whose mean exceeds the threshold, or which
+    /// fails; `None` when the curve holds over every level swept (or has no level 0 to compare).
+    pub fn breaking_level(&self) -> Option<f64> {
+        let zero = self.levels.first().filter(|l| l.level == 0.0)?;
+        let base = zero.mean()?;
+        let limit = (BREAK_FACTOR * base).max(base + BREAK_MARGIN_M);
+        self.levels[1..]
+            .iter()
+            .find(|l| l.is_failure() || l.mean().is_some_and(|m| m > limit))
+            .map(|l| l.level)
+    }
+}
+
+/// The heading of a system: ours by their column names (the baseline marked as ours), an
+/// external one by its definition's label.
+pub fn system_label(config: &str, labels: &BTreeMap<String, String>) -> String {
+    match ConfigKind::parse(config) {
+        Ok(ConfigKind::Orb) => "ORB-SLAM2 (ours)".into(),
+        Ok(k) => format!("{} (ours)", column_name(k)),
+        Err(_) => labels
+            .get(config)
+            .cloned()
+            .unwrap_or_else(|| config.to_string()),
+    }
+}
+
+/// Whether `r` is the unperturbed point of a perturbed sweep.
+fn is_zero_point(r: &RunRecord) -> bool {
+    r.perturbation.is_some() && r.perturb_family.is_none()
+}
+
+/// Severity order of a family's levels: ascending, except JPEG quality (descending: a lower
+/// quality is a stronger perturbation); level 0 (none) first in both.
+fn severity(family: &str, a: f64, b: f64) -> std::cmp::Ordering {
+    let desc = family == Family::Jpeg.name();
+    match (a == 0.0, b == 0.0) {
+        (true, false) => std::cmp::Ordering::Less,
+        (false, true) => std::cmp::Ordering::Greater,
+        _ if desc => b.total_cmp(&a),
+        _ => a.total_cmp(&b),
+    }
+}
+
+/// Every curve of a folder's records, by family (in the taxonomy's order), then sequence (in
+/// record order), then system (ours in the paper's order, then external ones).
+pub fn curves(
+    records: &[RunRecord],
+    labels: &BTreeMap<String, String>,
+) -> BTreeMap<String, Vec<Curve>> {
+    let mut families: Vec<String> = records
+        .iter()
+        .filter_map(|r| r.perturb_family.clone())
+        .collect();
+    families.sort_by_key(|f| {
+        Family::parse(f).map_or(usize::MAX, |f| {
+            Family::ALL
+                .iter()
+                .position(|g| *g == f)
+                .unwrap_or(usize::MAX)
+        })
+    });
+    families.dedup();
+    let mut out = BTreeMap::new();
+    for fam in families {
+        let mut keys: Vec<(String, String)> = Vec::new();
+        for r in records
+            .iter()
+            .filter(|r| r.perturb_family.as_deref() == Some(&fam))
+        {
+            let k = (r.sequence.clone(), r.config.clone());
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+        let rank = |c: &str| {
+            ConfigKind::parse(c)
+                .ok()
+                .and_then(|k| ConfigKind::EVERY.iter().position(|e| *e == k))
+                .unwrap_or(usize::MAX)
+        };
+        keys.sort_by(|a, b| {
+            a.0.cmp(&b.0)
+                .then(rank(&a.1).cmp(&rank(&b.1)))
+                .then(a.1.cmp(&b.1))
+        });
+        let mut list = Vec::new();
+        for (seq, sys) in keys {
+            let mut by_level: Vec<(f64, Vec<&RunRecord>)> = Vec::new();
+            for r in records
+                .iter()
+                .filter(|r| r.sequence == seq && r.config == sys && r.perturbation.is_some())
+            {
+                let level = if is_zero_point(r) {
+                    0.0
+                } else if r.perturb_family.as_deref() == Some(&fam) {
+                    r.perturb_level.unwrap_or(0.0)
+                } else {
+                    continue;
+                };
+                match by_level.iter_mut().find(|(l, _)| *l == level) {
+                    Some((_, v)) => v.push(r),
+                    None => by_level.push((level, vec![r])),
+                }
+            }
+            by_level.sort_by(|a, b| severity(&fam, a.0, b.0));
+            let levels = by_level
+                .into_iter()
+                .map(|(level, rs)| {
+                    let mut ates: Vec<f64> = rs
+                        .iter()
+                        .filter(|r| !r.failed)
+                        .filter_map(|r| r.ate_rmse)
+                        .collect();
+                    ates.sort_by(f64::total_cmp);
+                    LevelStats {
+                        level,
+                        n: rs.len(),
+                        failed: rs.iter().filter(|r| r.failed).count(),
+                        ates,
+                        fps: rs.iter().map(|r| r.fps).sum::<f64>() / rs.len().max(1) as f64,
+                    }
+                })
+                .collect();
+            list.push(Curve {
+                label: system_label(&sys, labels),
+                sequence: seq,
+                system: sys,
+                levels,
+            });
+        }
+        out.insert(fam, list);
+    }
+    out
+}
+
+/// Decimals of a millimetre figure: three significant digits (two decimals under 10 mm).
+fn mm_decimals(m: f64) -> usize {
+    let v = m * 1000.0;
+    if v >= 100.0 {
+        0
+    } else if v >= 10.0 {
+        1
+    } else {
+        2
+    }
+}
+
+/// `mean ± std` in millimetres, both with the decimals the mean needs.
+pub fn mm_pair(mean: f64, std: f64) -> String {
+    let d = mm_decimals(mean);
+    format!("{:.d$} ± {:.d$}", mean * 1000.0, std * 1000.0)
+}
+
+fn level_text(l: f64) -> String {
+    format!("{l}")
+}
+
+/// The Markdown table (ATE in mm, mean ± std, breaking level per row) and the tidy CSV (one row
+/// per sequence, system and level, in metres) of one family.
+pub fn table(family: &str, curves: &[Curve]) -> Rendered {
+    let fam = Family::parse(family).ok();
+    let unit = fam.map_or("", Family::unit);
+    let mut md = format!("## Resilience to {family} ({unit})\n\n");
+    let mut sequences: Vec<&str> = curves.iter().map(|c| c.sequence.as_str()).collect();
+    sequences.dedup();
+    for seq in sequences {
+        let rows: Vec<&Curve> = curves.iter().filter(|c| c.sequence == seq).collect();
+        let mut levels: Vec<f64> = Vec::new();
+        for c in &rows {
+            for l in &c.levels {
+                if !levels.contains(&l.level) {
+                    levels.push(l.level);
+                }
+            }
+        }
+        levels.sort_by(|a, b| severity(family, *a, *b));
+        let _ = writeln!(md, "### {seq}\n");
+        let _ = writeln!(
+            md,
+            "| system | {} | breaking level |",
+            levels
+                .iter()
+                .map(|l| format!("{family} {}", level_text(*l)))
+                .collect::<Vec<_>>()
+                .join(" | ")
+        );
+        let _ = writeln!(md, "|---|{}---|", "---|".repeat(levels.len()));
+        for c in rows {
+            let cells: Vec<String> = levels
+                .iter()
+                .map(|lv| match c.levels.iter().find(|l| l.level == *lv) {
+                    None => "".into(),
+                    Some(l) if l.is_failure() => format!("F ({}/{})", l.failed, l.n),
+                    Some(l) => {
+                        let mut t = mm_pair(l.mean().unwrap_or(0.0), l.std().unwrap_or(0.0));
+                        if l.failed > 0 {
+                            let _ = write!(t, " ({}F)", l.failed);
+                        }
+                        t
+                    }
+                })
+                .collect();
+            let breaking = match c.breaking_level() {
+                Some(b) => level_text(b),
+                None if c.levels.first().is_some_and(|l| l.level == 0.0) => format!(
+                    "none up to {}",
+                    c.levels
+                        .last()
+                        .map_or(String::new(), |l| level_text(l.level))
+                ),
+                None => "no level 0".into(),
+            };
+            let _ = writeln!(md, "| {} | {} | {breaking} |", c.label, cells.join(" | "));
+        }
+        md.push('\n');
+    }
+    let runs = curves
+        .iter()
+        .flat_map(|c| c.levels.iter().map(|l| l.n))
+        .max()
+        .unwrap_or(0);
+    let _ = writeln!(
+        md,
+        "ATE RMSE in millimetres, mean ± std over the runs that did not fail (up to {runs} per cell); \
+         'F (k/n)': more than half of the n runs failed (under 80 % of the frames tracked, or no ATE). \
+         Breaking level: the first level whose mean ATE exceeds max({BREAK_FACTOR} x the level-0 ATE, \
+         level-0 ATE + {} cm), or that fails; 'none up to L': the system held over every level swept.",
+        BREAK_MARGIN_M * 100.0
+    );
+    // The tidy CSV.
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let _ = w.write_record([
+        "sequence",
+        "system",
+        "label",
+        "family",
+        "level",
+        "unit",
+        "n",
+        "failed",
+        "mean_m",
+        "std_m",
+        "median_m",
+        "min_m",
+        "max_m",
+        "fps",
+        "breaking_level",
+    ]);
+    let opt = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
+    for c in curves {
+        let b = opt(c.breaking_level());
+        for l in &c.levels {
+            let _ = w.write_record([
+                c.sequence.clone(),
+                c.system.clone(),
+                c.label.clone(),
+                family.to_string(),
+                format!("{}", l.level),
+                unit.to_string(),
+                l.n.to_string(),
+                l.failed.to_string(),
+                opt(l.mean()),
+                opt(l.std()),
+                opt(l.median()),
+                opt(l.ates.first().copied()),
+                opt(l.ates.last().copied()),
+                format!("{:.2}", l.fps),
+                b.clone(),
+            ]);
+        }
+    }
+    let csv = String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default();
+    Rendered { markdown: md, csv }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rec(
+        config: &str,
+        family: Option<&str>,
+        level: f64,
+        seed: u64,
+        ate: f64,
+        failed: bool,
+    ) -> RunRecord {
+        RunRecord {
+            sequence: "s".into(),
+            config: config.into(),
+            tau_mf: None,
+            tau_gf: None,
+            tau_mg: None,
+            baseline: None,
+            seed,
+            ate_rmse: Some(ate),
+            failed,
+            frames: 100,
+            tracked: 100,
+            keyframes: None,
+            map_points: None,
+            mean_inliers: None,
+            mean_outliers: None,
+            fps: 100.0,
+            wall_s: 1.0,
+            synth_seed: None,
+            loops: None,
+            reason: None,
+            peak_rss_mb: None,
+            cpu_s: None,
+            perturbation: Some(family.map_or("none".into(), |f| format!("{f}:{level}"))),
+            perturb_family: family.map(String::from),
+            perturb_level: family.map(|_| level),
+            perturb_seed: Some(0),
+        }
+    }
+
+    #[test]
+    fn breaking_levels_follow_the_definition() {
+        let mut r = Vec::new();
+        for seed in 0..2 {
+            // orb: 2 mm at 0, 3.9 at 1 (under 2x and +1 cm), 12.5 at 2 (over 2 mm + 1 cm).
+            r.push(rec("orb", None, 0.0, seed, 0.002, false));
+            r.push(rec("orb", Some("depth-axial"), 1.0, seed, 0.0039, false));
+            r.push(rec("orb", Some("depth-axial"), 2.0, seed, 0.0125, false));
+            // avc: 30 mm at 0; 59 mm at 2 (under 2x): holds; fails at 4 in 2 of 2 runs.
+            r.push(rec("avc", None, 0.0, seed, 0.030, false));
+            r.push(rec("avc", Some("depth-axial"), 2.0, seed, 0.059, false));
+            r.push(rec("avc", Some("depth-axial"), 4.0, seed, 0.5, true));
+        }
+        let c = curves(&r, &BTreeMap::new());
+        let axial = &c["depth-axial"];
+        assert_eq!(axial[0].system, "orb");
+        assert_eq!(axial[0].breaking_level(), Some(2.0));
+        assert_eq!(axial[1].breaking_level(), Some(4.0));
+        let t = table("depth-axial", axial);
+        assert!(
+            t.markdown
+                .contains("| ORB-SLAM2 (ours) | 2.00 ± 0.00 | 3.90 ± 0.00 | 12.5 ± 0.0 |  | 2 |"),
+            "{}",
+            t.markdown
+        );
+        assert!(t.markdown.contains("F (2/2)"));
+        // The tidy CSV holds numbers equal to the records' statistics.
+        let mut rdr = csv::Reader::from_reader(t.csv.as_bytes());
+        let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
+        let orb2 = rows
+            .iter()
+            .find(|r| &r[1] == "orb" && &r[4] == "2")
+            .unwrap();
+        assert_eq!(orb2[8].parse::<f64>().unwrap(), 0.0125);
+        assert_eq!(&orb2[14], "2");
+        // JPEG: lower quality is stronger.
+        let mut j = vec![rec("orb", None, 0.0, 0, 0.002, false)];
+        for q in [90.0, 30.0, 60.0] {
+            j.push(rec(
+                "orb",
+                Some("jpeg"),
+                q,
+                0,
+                0.002 + (100.0 - q) * 0.001,
+                false,
+            ));
+        }
+        let c = curves(&j, &BTreeMap::new());
+        let lv: Vec<f64> = c["jpeg"][0].levels.iter().map(|l| l.level).collect();
+        assert_eq!(lv, [0.0, 90.0, 60.0, 30.0]);
+        assert_eq!(c["jpeg"][0].breaking_level(), Some(60.0));
+    }
+}
