@@ -83,6 +83,11 @@ pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
                 .join(", ")
         );
     }
+    // Values that parse but make no sense (`[orb] scale_factor = 0.5`) are refused here, with
+    // their range, before anything runs.
+    config
+        .check()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     Ok(config)
 }
 
@@ -242,6 +247,18 @@ mod tests {
             c.loop_closing.consistency,
             Config::default().loop_closing.consistency
         );
+    }
+
+    #[test]
+    fn values_out_of_range_are_refused_with_their_range() {
+        // Issue 45: this value once made a 6-frame run take 11.6 GB and 173 s.
+        let p = file("shrink", "[orb]\nscale_factor = 0.5\n");
+        let e = format!("{:#}", overlay_file(&Config::default(), &p).unwrap_err());
+        assert!(e.contains("shrink.toml"), "{e}");
+        assert!(e.contains("orb.scale_factor = 0.5: must be > 1"), "{e}");
+        let p = file("nan", "[mcor]\ntau_mf = nan\n");
+        let e = format!("{:#}", overlay_file(&Config::default(), &p).unwrap_err());
+        assert!(e.contains("mcor.tau_mf = NaN: must be > 0"), "{e}");
     }
 
     #[test]

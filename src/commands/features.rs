@@ -121,9 +121,8 @@ pub fn run(args: FeaturesArgs) -> anyhow::Result<()> {
 
 /// Reads a PNG as 8-bit grey.
 fn read_gray(path: &Path) -> anyhow::Result<GrayImage> {
-    let img = image::open(path)
-        .with_context(|| format!("{}: cannot read image", path.display()))?
-        .to_luma8();
+    // The header is checked before the pixels are allocated (datasets::decode).
+    let img = datasets::decode::read_image(path)?.to_luma8();
     Ok(GrayImage {
         width: img.width() as usize,
         height: img.height() as usize,
@@ -136,9 +135,7 @@ fn read_depth(path: &Path, factor: f64, image: &GrayImage) -> anyhow::Result<Dep
     if factor.is_nan() || factor <= 0.0 {
         bail!("--depth-factor must be positive, got {factor}");
     }
-    let img = image::open(path)
-        .with_context(|| format!("{}: cannot read depth image", path.display()))?
-        .to_luma16();
+    let img = datasets::decode::read_image(path)?.to_luma16();
     let (w, h) = (img.width() as usize, img.height() as usize);
     if (w, h) != (image.width, image.height) {
         bail!(

@@ -50,6 +50,11 @@ pub struct Loaded {
 
 /// Relative deviation from unit norm beyond which a quaternion is reported as repaired.
 const QUAT_NORM_TOLERANCE: f64 = 1e-3;
+/// Largest `|R^T R - I|` of a rotation block that is re-orthonormalised (with a warning
+/// beyond 1e-3); beyond it the block is refused. Besides meaning the block is no rotation, a
+/// block far from one can make nalgebra's `from_matrix_eps` loop forever (a fuzzed KITTI
+/// line with an entry of 7e61: its search cannot see a rotation's entries beside it).
+const MAX_ORTHONORMALITY_ERROR: f64 = 0.5;
 /// Norm below which a quaternion carries no rotation and the line is rejected.
 const QUAT_MIN_NORM: f64 = 1e-6;
 
@@ -162,14 +167,16 @@ pub fn read_tum_loaded(path: &Path, policy: StampPolicy) -> Result<Loaded> {
         if content.is_empty() {
             continue;
         }
-        let fields: Vec<&str> = content
+        let mut all = content
             .split(|c: char| c.is_whitespace() || c == ',')
-            .filter(|s| !s.is_empty())
-            .collect();
+            .filter(|s| !s.is_empty());
+        // At most 9 fields are kept (the rest only counted): a line of a million separators
+        // must not cost 16 bytes a field.
+        let fields: Vec<&str> = all.by_ref().take(9).collect();
         if fields.len() != 8 {
             return Err(ctx.err(format!(
                 "expected 8 fields (timestamp tx ty tz qx qy qz qw), found {}",
-                fields.len()
+                fields.len() + all.count()
             )));
         }
         let v = ctx.numbers(&fields)?;
@@ -201,7 +208,9 @@ pub fn read_euroc_loaded(path: &Path, policy: StampPolicy) -> Result<Loaded> {
         if content.is_empty() || content.starts_with('#') {
             continue;
         }
-        let fields: Vec<&str> = content.split(',').map(str::trim).collect();
+        // The first 8 fields; further columns are ignored, and never collected (a line of a
+        // million commas must not cost 16 bytes a field).
+        let fields: Vec<&str> = content.split(',').map(str::trim).take(8).collect();
         if fields.len() < 8 {
             return Err(ctx.err(format!(
                 "expected at least 8 comma-separated fields (timestamp [ns], p xyz, q wxyz), found {}",
@@ -253,11 +262,12 @@ pub fn read_kitti_loaded(path: &Path, times: Option<&Path>, policy: StampPolicy)
         if content.is_empty() || content.starts_with('#') {
             continue;
         }
-        let fields: Vec<&str> = content.split_whitespace().collect();
+        let mut all = content.split_whitespace();
+        let fields: Vec<&str> = all.by_ref().take(13).collect();
         if fields.len() != 12 {
             return Err(ctx.err(format!(
                 "expected 12 numbers (row-major 3x4 pose), found {}",
-                fields.len()
+                fields.len() + all.count()
             )));
         }
         let v = ctx.numbers(&fields)?;
@@ -269,6 +279,11 @@ pub fn read_kitti_loaded(path: &Path, times: Option<&Path>, policy: StampPolicy)
             )));
         }
         let orth_err = (m.transpose() * m - Matrix3::identity()).abs().max();
+        if orth_err.is_nan() || orth_err > MAX_ORTHONORMALITY_ERROR {
+            return Err(ctx.err(format!(
+                "rotation block is far from a rotation (|R^T R - I| = {orth_err:.2e})"
+            )));
+        }
         if orth_err > 1e-3 {
             warnings.push(Warning {
                 path: path.to_path_buf(),
@@ -303,11 +318,12 @@ pub fn read_kitti_loaded(path: &Path, times: Option<&Path>, policy: StampPolicy)
                     path: tp,
                     line: i + 1,
                 };
-                let fields: Vec<&str> = content.split_whitespace().collect();
+                let mut all = content.split_whitespace();
+                let fields: Vec<&str> = all.by_ref().take(2).collect();
                 if fields.len() != 1 {
                     return Err(ctx.err(format!(
                         "expected one timestamp, found {} fields",
-                        fields.len()
+                        fields.len() + all.count()
                     )));
                 }
                 out.push((i + 1, ctx.numbers(&fields)?[0]));
@@ -469,7 +485,8 @@ pub fn read_euroc_t_bs(path: &Path) -> Result<Isometry3<f64>> {
     }
     let v = ctx.numbers(&fields)?;
     let m = Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
-    if m.determinant() <= 1e-6 {
+    let orth_err = (m.transpose() * m - Matrix3::identity()).abs().max();
+    if m.determinant() <= 1e-6 || orth_err.is_nan() || orth_err > MAX_ORTHONORMALITY_ERROR {
         return Err(ctx.err("T_BS rotation block is not a rotation"));
     }
     let rot = Rotation3::from_matrix_eps(&m, 1e-12, 100, Rotation3::identity());
@@ -693,6 +710,29 @@ mod tests {
         ));
         let p = tmp_file("k11.txt", "1 0 0 1 0 1 0 2 0 0 1\n");
         assert_eq!(parse_err(read_kitti(&p, None).unwrap_err()).0, 1);
+    }
+
+    #[test]
+    fn a_rotation_entry_of_7e61_is_refused_not_looped_on() {
+        // Found by fuzzing: nalgebra's `from_matrix_eps` never returned for this block (its
+        // search cannot see a rotation's entries beside 7e61), whatever its iteration cap.
+        let p = tmp_file(
+            "k7e61.txt",
+            "1 0 0 1 0 1 7e61 2 0 0 1 3
+",
+        );
+        let (line, msg) = parse_err(read_kitti(&p, None).unwrap_err());
+        assert_eq!(line, 1);
+        assert!(msg.contains("far from a rotation"), "{msg}");
+        let p = tmp_file(
+            "tbs7e61.yaml",
+            "T_BS:\n  data: [1, 0, 0, 0, 0, 1, 7e61, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n",
+        );
+        let e = read_euroc_t_bs(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("tbs7e61.yaml:2") && e.contains("not a rotation"),
+            "{e}"
+        );
     }
 
     #[test]

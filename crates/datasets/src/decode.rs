@@ -1,10 +1,62 @@
 //! PNG decoding into slam-core's plain images: colour or grey PNGs to 8-bit grey (ITU-R BT.601
-//! weights, as OpenCV's `cvtColor(RGB2GRAY)` that ORB-SLAM2 uses), 16-bit depth PNGs to metres.
+//! weights, as OpenCV's `cvtColor(RGB2GRAY)` that ORB-SLAM2 uses), 16-bit depth PNGs to metres;
+//! and any PNG or JPEG for `noisefree features`.
+//!
+//! An image's header is checked before its pixels are allocated: a header claiming more pixels
+//! than the file's compressed data can expand to ([`MAX_PIXELS_PER_BYTE`]) is refused, so a
+//! corrupt or hostile 100-byte file cannot make the reader allocate gigabytes.
 
 use crate::DatasetError;
-use image::DynamicImage;
+use image::{DynamicImage, ImageFormat, ImageReader};
 use slam_core::{DepthImage, GrayImage};
+use std::io::Cursor;
 use std::path::Path;
+
+/// Most pixels a compressed image can hold per byte of its file: deflate (PNG) expands at most
+/// 1032:1, and a 1-bit PNG holds 8 pixels in a byte of expanded data. (JPEG's baseline needs at
+/// least two bits per 8x8 block, 256 pixels a byte; its progressive mode's runs of empty blocks
+/// are held to the same bound as PNG.)
+pub const MAX_PIXELS_PER_BYTE: u64 = 8 * 1032;
+
+/// Pixels any image may claim whatever its size (a small file may be a plain 64x64 image).
+const MIN_PIXEL_ALLOWANCE: u64 = 1 << 16;
+
+/// Decodes `bytes` (the file `path`) as `format`, or as the format its content shows when
+/// `None`, after checking that the header's size is one its data can hold.
+fn decode(
+    path: &Path,
+    bytes: &[u8],
+    format: Option<ImageFormat>,
+) -> Result<DynamicImage, DatasetError> {
+    let fail = |msg: String| DatasetError::Decode {
+        path: path.to_path_buf(),
+        msg,
+    };
+    let reader = |b: &[u8]| -> Result<ImageReader<Cursor<Vec<u8>>>, DatasetError> {
+        let r = ImageReader::new(Cursor::new(b.to_vec()));
+        match format {
+            Some(f) => {
+                let mut r = r;
+                r.set_format(f);
+                Ok(r)
+            }
+            None => r.with_guessed_format().map_err(|e| fail(e.to_string())),
+        }
+    };
+    let (w, h) = reader(bytes)?
+        .into_dimensions()
+        .map_err(|e| fail(e.to_string()))?;
+    let pixels = u64::from(w) * u64::from(h);
+    let allowed = MIN_PIXEL_ALLOWANCE + MAX_PIXELS_PER_BYTE * bytes.len() as u64;
+    if pixels > allowed {
+        return Err(fail(format!(
+            "the header says {w}x{h} pixels, more than its {} bytes can hold (at most {allowed} \
+             pixels); the file is corrupt or truncated",
+            bytes.len()
+        )));
+    }
+    reader(bytes)?.decode().map_err(|e| fail(e.to_string()))
+}
 
 fn open(path: &Path) -> Result<DynamicImage, DatasetError> {
     if !path.is_file() {
@@ -14,12 +66,14 @@ fn open(path: &Path) -> Result<DynamicImage, DatasetError> {
         });
     }
     let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
-    image::load_from_memory_with_format(&bytes, image::ImageFormat::Png).map_err(|e| {
-        DatasetError::Decode {
-            path: path.to_path_buf(),
-            msg: e.to_string(),
-        }
-    })
+    decode(path, &bytes, Some(ImageFormat::Png))
+}
+
+/// Reads an image of any format the build decodes (PNG, JPEG), told by its content, with the
+/// same header check as the sequence readers.
+pub fn read_image(path: &Path) -> Result<DynamicImage, DatasetError> {
+    let bytes = std::fs::read(path).map_err(|e| DatasetError::io(path, e))?;
+    decode(path, &bytes, None)
 }
 
 /// BT.601 luma in 14-bit fixed point with rounding (the constants OpenCV uses), so grey values
@@ -129,5 +183,41 @@ mod tests {
         let err = read_depth(&p8, 5000.0).unwrap_err();
         assert!(matches!(err, DatasetError::DepthFormat { .. }), "{err}");
         assert!(err.to_string().contains("8-bit grey"));
+    }
+
+    #[test]
+    fn a_header_claiming_more_pixels_than_the_file_holds_is_refused_unallocated() {
+        // A real 1x1 PNG whose IHDR is rewritten to 65535 x 65535 (CRC repaired): 4.3 G
+        // pixels in 70 bytes. Decoding would allocate 4 GB before finding the data short.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("liar.png");
+        image::GrayImage::from_raw(1, 1, vec![7])
+            .unwrap()
+            .save(&p)
+            .unwrap();
+        let mut b = std::fs::read(&p).unwrap();
+        b[16..24].copy_from_slice(&[0, 0, 0xff, 0xff, 0, 0, 0xff, 0xff]);
+        let crc = crc32(&b[12..29]);
+        b[29..33].copy_from_slice(&crc.to_be_bytes());
+        std::fs::write(&p, &b).unwrap();
+        let e = read_gray(&p).unwrap_err().to_string();
+        assert!(e.contains("liar.png") && e.contains("65535x65535"), "{e}");
+        let e = read_image(&p).unwrap_err().to_string();
+        assert!(e.contains("more than its"), "{e}");
+    }
+
+    fn crc32(b: &[u8]) -> u32 {
+        let mut c = 0xffff_ffffu32;
+        for &x in b {
+            c ^= u32::from(x);
+            for _ in 0..8 {
+                c = if c & 1 != 0 {
+                    0xedb8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
     }
 }

@@ -137,6 +137,13 @@ fn yaml_list(path: &Path, text: &str, key: &str, n: usize) -> Result<Vec<f64>, D
         .map(|s| s.parse::<f64>())
         .collect();
     let vals = vals.map_err(|e| DatasetError::parse(path, line, format!("`{key}`: {e}")))?;
+    if let Some(v) = vals.iter().find(|v| !v.is_finite()) {
+        return Err(DatasetError::parse(
+            path,
+            line,
+            format!("`{key}` holds {v}, not a finite number"),
+        ));
+    }
     if vals.len() != n {
         return Err(DatasetError::parse(
             path,
@@ -145,6 +152,24 @@ fn yaml_list(path: &Path, text: &str, key: &str, n: usize) -> Result<Vec<f64>, D
         ));
     }
     Ok(vals)
+}
+
+/// The rotation nearest to `m` (nalgebra's `from_matrix`, whose result it gives bit for bit),
+/// or `None` when `m` is far from any rotation (`|m^T m - I| > 0.5`, or not finite). The check
+/// comes first because `from_matrix` never returns for some such matrices: with an entry of
+/// 7e61 (a fuzzed `sensor.yaml`) its search cannot see a rotation's entries beside it and
+/// loops forever.
+pub(crate) fn near_rotation(m: &Matrix3<f64>) -> Option<Rotation3<f64>> {
+    let err = (m.transpose() * m - Matrix3::identity()).abs().max();
+    if err.is_nan() || err > 0.5 {
+        return None;
+    }
+    Some(Rotation3::from_matrix_eps(
+        m,
+        f64::EPSILON,
+        1000,
+        Rotation3::identity(),
+    ))
 }
 
 /// Parses an EuRoC camera `sensor.yaml`: `T_BS` (4x4 row-major), `resolution`, `intrinsics`
@@ -188,11 +213,13 @@ pub fn read_sensor_yaml(path: &Path) -> Result<RawCamera, DatasetError> {
     };
     let m = Matrix3::new(t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]);
     // The published rotations are orthonormal to ~1e-9; re-orthonormalise via the quaternion.
-    let rot = Rotation3::from_matrix(&m);
-    if (rot.matrix() - m).norm() > 1e-3 {
+    let rot = near_rotation(&m).unwrap_or_else(Rotation3::identity);
+    let off = (rot.matrix() - m).norm();
+    if off.is_nan() || off > 1e-3 {
+        let line = yaml_value(&text, "data").map_or(0, |v| v.1);
         return Err(DatasetError::parse(
             path,
-            0,
+            line,
             "T_BS rotation part is not a rotation",
         ));
     }
@@ -200,11 +227,35 @@ pub fn read_sensor_yaml(path: &Path) -> Result<RawCamera, DatasetError> {
         Translation3::from(Vector3::new(t[3], t[7], t[11])),
         UnitQuaternion::from_rotation_matrix(&rot),
     );
-    if res[0] < 1.0 || res[1] < 1.0 || k[0] <= 0.0 || k[1] <= 0.0 {
+    let side = f64::from(crate::settings::MAX_IMAGE_SIDE);
+    if !(res
+        .iter()
+        .all(|&r| (1.0..=side).contains(&r) && r.fract() == 0.0))
+    {
+        let line = yaml_value(&text, "resolution").map_or(0, |v| v.1);
         return Err(DatasetError::parse(
             path,
-            0,
-            "resolution and focal lengths must be positive",
+            line,
+            format!(
+                "resolution = [{}, {}]: each side must be a whole number in 1..={side}",
+                res[0], res[1]
+            ),
+        ));
+    }
+    if k[0] <= 0.0 || k[1] <= 0.0 {
+        let line = yaml_value(&text, "intrinsics").map_or(0, |v| v.1);
+        return Err(DatasetError::parse(
+            path,
+            line,
+            format!("intrinsics: fu = {}, fv = {}: must be > 0", k[0], k[1]),
+        ));
+    }
+    if !(rate_hz > 0.0 && rate_hz <= 10_000.0) {
+        let line = yaml_value(&text, "rate_hz").map_or(0, |v| v.1);
+        return Err(DatasetError::parse(
+            path,
+            line,
+            format!("rate_hz = {rate_hz}: must be > 0 and <= 10000"),
         ));
     }
     Ok(RawCamera {
@@ -363,6 +414,25 @@ mod tests {
         assert_eq!(line, 3);
         assert!(v.starts_with('[') && v.ends_with(']'), "{v}");
         assert_eq!(yaml_value(text, "rate_hz").unwrap().0, "20");
+    }
+
+    #[test]
+    fn a_t_bs_entry_of_7e61_is_refused_at_once() {
+        // Found by fuzzing: nalgebra's `from_matrix` looped forever on this matrix.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("sensor.yaml");
+        std::fs::write(
+            &p,
+            "T_BS:\n  data: [1, 0, 0, 0, 0, 1, 7e61, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n\
+             resolution: [752, 480]\nintrinsics: [458, 457, 367, 248]\n\
+             distortion_coefficients: [0, 0, 0, 0]\n",
+        )
+        .unwrap();
+        let e = read_sensor_yaml(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("sensor.yaml") && e.contains("not a rotation"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -580,17 +580,17 @@ fn parse_entries<'a>(path: &'a Path, text: &str) -> Result<Entries<'a>, DatasetE
                 .split(',')
                 .map(str::trim)
                 .filter(|s| !s.is_empty())
-                .map(|s| {
-                    s.parse::<f64>().map_err(|_| {
-                        DatasetError::parse(
-                            path,
-                            line_no,
-                            format!("matrix `{key}`: `{s}` is not a number"),
-                        )
-                    })
+                .map(|s| match s.parse::<f64>() {
+                    Ok(v) if v.is_finite() => Ok(v),
+                    _ => Err(DatasetError::parse(
+                        path,
+                        line_no,
+                        format!("matrix `{key}`: `{s}` is not a finite number"),
+                    )),
                 })
                 .collect::<Result<_, _>>()?;
-            if values.len() != rows * cols {
+            // Checked: `rows` and `cols` are the file's, and their product may overflow.
+            if rows.checked_mul(cols) != Some(values.len()) {
                 return Err(DatasetError::parse(
                     path,
                     line_no,
@@ -666,7 +666,8 @@ impl Entries<'_> {
             )),
             Some((Node::Matrix(r, c, d), line)) => {
                 // OpenCV reads a 1x5 distortion as 5x1 too.
-                if (*r, *c) == (rows, cols) || (*r * *c == rows * cols && (rows == 1 || cols == 1))
+                if (*r, *c) == (rows, cols)
+                    || (r.checked_mul(*c) == Some(rows * cols) && (rows == 1 || cols == 1))
                 {
                     Ok(d.clone())
                 } else {
@@ -760,11 +761,140 @@ pub fn read_settings(path: &Path, sensor: SensorKind) -> Result<CameraSettings, 
         ));
     }
     let e = parse_entries(path, &text)?;
-    if e.has("File.version") {
-        read_orbslam3(&e, sensor)
+    let (s, o3) = if e.has("File.version") {
+        (read_orbslam3(&e, sensor)?, true)
     } else {
-        read_orbslam2(&e, sensor)
+        (read_orbslam2(&e, sensor)?, false)
+    };
+    check_ranges(&e, &s, o3)?;
+    Ok(s)
+}
+
+/// Largest image side a settings file or `sensor.yaml` may give, pixels: an 8K sensor. The
+/// rectification of a stereo pair allocates maps of the image's size (8 bytes a pixel a
+/// camera) as soon as the file is read, so a mistyped or corrupt size must not reach it.
+pub const MAX_IMAGE_SIDE: u32 = 8192;
+
+/// Checks the values a settings file gave against their valid ranges: a value that parses but
+/// makes no sense (`ORBextractor.scaleFactor: 0.5`, a negative focal length) is refused with
+/// its key, its line, its value and the range.
+fn check_ranges(e: &Entries, s: &CameraSettings, o3: bool) -> Result<(), DatasetError> {
+    let c = &s.camera;
+    let cam = if o3 { "Camera1" } else { "Camera" };
+    let th = if o3 { "Stereo.ThDepth" } else { "ThDepth" };
+    let factor = if o3 {
+        "RGBD.DepthMapFactor"
+    } else {
+        "DepthMapFactor"
+    };
+    let side = MAX_IMAGE_SIDE as f64;
+    let o = &s.orb;
+    let mut checks: Vec<(String, f64, bool, String)> = vec![
+        (format!("{cam}.fx"), c.fx, c.fx > 0.0, "must be > 0".into()),
+        (format!("{cam}.fy"), c.fy, c.fy > 0.0, "must be > 0".into()),
+        (
+            "Camera.width".into(),
+            c.width as f64,
+            c.width <= MAX_IMAGE_SIDE,
+            format!("must be <= {side}"),
+        ),
+        (
+            "Camera.height".into(),
+            c.height as f64,
+            c.height <= MAX_IMAGE_SIDE,
+            format!("must be <= {side}"),
+        ),
+        (
+            "Camera.fps".into(),
+            c.fps,
+            c.fps > 0.0 && c.fps <= 10_000.0,
+            "must be > 0 and <= 10000".into(),
+        ),
+        (
+            th.into(),
+            c.th_depth,
+            c.th_depth > 0.0,
+            "must be > 0".into(),
+        ),
+        (
+            "ORBextractor.nFeatures".into(),
+            o.n_features as f64,
+            (1..=200_000).contains(&o.n_features),
+            "must be in 1..=200000".into(),
+        ),
+        (
+            "ORBextractor.scaleFactor".into(),
+            o.scale_factor,
+            o.scale_factor > 1.0,
+            "must be > 1".into(),
+        ),
+        (
+            "ORBextractor.scaleFactor".into(),
+            o.scale_factor,
+            o.scale_factor <= 4.0,
+            "must be <= 4".into(),
+        ),
+        (
+            "ORBextractor.nLevels".into(),
+            o.n_levels as f64,
+            (1..=32).contains(&o.n_levels),
+            "must be in 1..=32".into(),
+        ),
+        (
+            "ORBextractor.iniThFAST".into(),
+            o.ini_th_fast as f64,
+            o.ini_th_fast >= 1,
+            "must be in 1..=255".into(),
+        ),
+        (
+            "ORBextractor.minThFAST".into(),
+            o.min_th_fast as f64,
+            o.min_th_fast >= 1 && o.min_th_fast <= o.ini_th_fast,
+            format!("must be in 1..={} (iniThFAST)", o.ini_th_fast.max(1)),
+        ),
+    ];
+    let bf = if o3 { "Stereo.b" } else { "Camera.bf" };
+    match c.sensor {
+        SensorKind::Stereo => checks.push((bf.into(), c.bf, c.bf > 0.0, "must be > 0".into())),
+        SensorKind::Rgbd => checks.push((bf.into(), c.bf, c.bf >= 0.0, "must be >= 0".into())),
     }
+    if let Some(f) = s.depth_factor {
+        checks.push((factor.into(), f, f > 0.0, "must be > 0".into()));
+    }
+    for cam in s
+        .rig
+        .iter()
+        .flat_map(|r| [&r.left, &r.right])
+        .chain(s.raw_pair.iter().flat_map(|(l, r)| [l, r]))
+    {
+        for (k, v) in [("width", cam.width), ("height", cam.height)] {
+            checks.push((
+                format!("LEFT.{k} / RIGHT.{k}"),
+                v as f64,
+                v <= MAX_IMAGE_SIDE,
+                format!("must be <= {side}"),
+            ));
+        }
+        for (k, v) in [("fx", cam.fx), ("fy", cam.fy)] {
+            checks.push((
+                format!("the raw cameras' {k}"),
+                v,
+                v > 0.0,
+                "must be > 0".into(),
+            ));
+        }
+    }
+    for (key, value, ok, rule) in checks {
+        if !(ok && value.is_finite()) {
+            let line = e.map.get(&key).map_or(0, |entry| entry.1);
+            return Err(DatasetError::parse(
+                e.path,
+                line,
+                format!("{key} = {value}: {rule}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn read_orbslam2(e: &Entries, sensor: SensorKind) -> Result<CameraSettings, DatasetError> {
@@ -920,7 +1050,13 @@ fn read_orbslam3(e: &Entries, sensor: SensorKind) -> Result<CameraSettings, Data
             let [fx2, fy2, cx2, cy2] = intr("Camera2")?;
             let t = e.matrix("Stereo.T_c1_c2", 4, 4)?;
             let m = Matrix4::from_row_slice(&t);
-            let rot = Rotation3::from_matrix(&m.fixed_view::<3, 3>(0, 0).into_owned());
+            let r3 = m.fixed_view::<3, 3>(0, 0).into_owned();
+            let rot = crate::euroc::near_rotation(&r3).ok_or_else(|| {
+                DatasetError::invalid(
+                    e.path,
+                    "`Stereo.T_c1_c2`: its rotation block is not a rotation",
+                )
+            })?;
             let t_c1_c2 = Isometry3::from_parts(
                 Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),
                 UnitQuaternion::from_rotation_matrix(&rot),

@@ -110,7 +110,8 @@ pub fn read_associations(path: &Path) -> Result<Vec<(ListEntry, ListEntry)>, Dat
         if l.is_empty() || l.starts_with('#') {
             continue;
         }
-        let f: Vec<&str> = l.split_whitespace().collect();
+        // Four fields; more are ignored, and never collected.
+        let f: Vec<&str> = l.split_whitespace().take(4).collect();
         if f.len() < 4 {
             return Err(DatasetError::parse(
                 path,

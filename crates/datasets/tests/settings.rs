@@ -368,6 +368,23 @@ fn bad_settings_files_are_refused_with_their_name() {
         (text.replace("Camera.fx:", "Camera.fz:"), "Camera.fx"),
         (text.replace("ThDepth: 40.0", "ThDepth: forty"), "forty"),
         ("just words\n".to_string(), "not an ORB-SLAM2"),
+        // Values that parse but are out of range (issue 45), named with line and range.
+        (
+            text.replace(
+                "ORBextractor.scaleFactor: 1.2",
+                "ORBextractor.scaleFactor: 0.5",
+            ),
+            "ORBextractor.scaleFactor = 0.5: must be > 1",
+        ),
+        (
+            text.replace("ORBextractor.nLevels: 8", "ORBextractor.nLevels: 100000"),
+            "ORBextractor.nLevels = 100000: must be in 1..=32",
+        ),
+        (text.replace("Camera.fx: ", "Camera.fx: -"), "Camera.fx = -"),
+        (
+            text.replace("Camera.width: 640", "Camera.width: 4000000000"),
+            "Camera.width = 4000000000: must be <= 8192",
+        ),
         (
             text.replace(
                 "Camera.bf: 40.0",

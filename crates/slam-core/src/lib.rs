@@ -13,7 +13,8 @@
 //! - [`module`]: tracking, local mapping, relocalization;
 //! - [`place`]: place recognition (vocabulary, BoW vectors, keyframe database, training);
 //! - [`solve`]: triangulation, absolute orientation, pose RANSAC;
-//! - [`system`]: the synchronous `System` tying them together.
+//! - [`system`]: the synchronous `System` tying them together; [`ranges`]: the valid range of
+//!   every configuration value (`Config::check`).
 
 pub mod camera;
 pub mod data;
@@ -25,6 +26,7 @@ pub mod matching;
 pub mod module;
 pub mod optimize;
 pub mod place;
+pub mod ranges;
 pub mod solve;
 pub mod system;
 pub mod techniques;

@@ -348,6 +348,26 @@ impl Vocabulary {
             .collect()
     }
 
+    /// Parses a vocabulary file's bytes in either form: the binary form when they start with
+    /// its magic, else DBoW2's text form (which must be UTF-8).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Vocabulary, VocabularyError> {
+        if bytes.starts_with(BINARY_MAGIC) {
+            return Self::from_binary(bytes);
+        }
+        let text = std::str::from_utf8(bytes).map_err(|e| {
+            err(
+                0,
+                format!(
+                    "neither a DBoW2 text vocabulary (not UTF-8 text at byte {}) nor a noisefree \
+                     binary one (no {:?} magic)",
+                    e.valid_up_to(),
+                    String::from_utf8_lossy(BINARY_MAGIC)
+                ),
+            )
+        })?;
+        Self::from_text(text)
+    }
+
     /// Parses DBoW2's text form (ORB-SLAM2's `ORBvoc.txt`).
     pub fn from_text(text: &str) -> Result<Vocabulary, VocabularyError> {
         let mut lines = text

@@ -1,0 +1,512 @@
+//! The fuzz loop: draws inputs from a target's [`Mutator`], hands each to the reader under
+//! `catch_unwind`, and keeps the books a reader is judged by:
+//! - a panic is a crash: counted, its input shrunk to the smallest that still panics, saved;
+//! - an input that takes longer than a base time plus a time per byte is slow (a reader must
+//!   run in time linear in its input); one that takes longer than the hang limit is stopped by
+//!   a watchdog, which saves it and ends the process;
+//! - with the counting allocator installed ([`super::alloc`]), an input for which the reader
+//!   had more bytes live at once than a floor plus a multiple of the input's size is an
+//!   allocation bomb (a header believed), and a single allocation beyond a hard limit is saved
+//!   and aborts the process before it takes the machine's memory;
+//! - an error that does not name the file (when the reader reads one) is a finding too.
+//!
+//! One run at a time per process: the state the watchdog and the allocation limit share is
+//! global, and [`run`] takes a lock for its duration.
+
+use super::alloc;
+use super::mutate::Mutator;
+use super::rng::Rng;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// A reader under test: takes the bytes of a file, returns whether it accepted them (`Err`
+/// holds the error message shown to the user).
+pub type Reader = Box<dyn Fn(&[u8]) -> Result<(), String> + Send + Sync>;
+
+/// A fuzz target: one reader, its seeds, and what it is held to.
+pub struct Target {
+    /// Short name (`tum-trajectory`), used on the command line and in the results.
+    pub name: &'static str,
+    /// What it reads, for the results table.
+    pub about: &'static str,
+    /// The file name every error must contain; empty for readers of memory (no file).
+    pub file: &'static str,
+    /// The input generator over the seeds.
+    pub mutator: Mutator,
+    /// Applied to every mutated input: repairs a checksum or CRC so that mutations reach the
+    /// parser behind it (on 7 inputs of 8; the rest go unrepaired).
+    pub fixup: Option<fn(&mut [u8])>,
+    /// Bytes the reader may have live beyond the input's size times this (a compressed image
+    /// may decode to 1032 times its size, a text line to a few times its length).
+    pub alloc_factor: f64,
+    /// The reader.
+    pub read: Reader,
+}
+
+/// Bounds an input is held to, and when to stop.
+#[derive(Clone, Debug)]
+pub struct Limits {
+    /// Stop after this many inputs.
+    pub max_inputs: Option<u64>,
+    /// Stop after this long.
+    pub max_time: Option<Duration>,
+    /// Time any input may take, besides `time_per_byte` times its length.
+    pub time_base: Duration,
+    /// Time per input byte (linear time).
+    pub time_per_byte: Duration,
+    /// An input running this long is a hang: saved, and the process ends.
+    pub hang: Duration,
+    /// Bytes any input may make the reader hold, besides `alloc_factor` times its length.
+    pub alloc_floor: usize,
+    /// Largest single allocation granted at all (see [`alloc::set_limit`]).
+    pub alloc_hard_limit: usize,
+    /// Where crashing, slow and hanging inputs are saved (`None`: not saved).
+    pub out_dir: Option<PathBuf>,
+}
+
+impl Limits {
+    /// The bounds of a short CI pass of `inputs` inputs: generous times (a loaded machine
+    /// must not fail it), the same allocation bound as a long run.
+    pub fn ci(inputs: u64) -> Limits {
+        Limits {
+            max_inputs: Some(inputs),
+            max_time: None,
+            time_base: Duration::from_secs(2),
+            time_per_byte: Duration::from_micros(2),
+            hang: Duration::from_secs(120),
+            alloc_floor: 8 << 20,
+            alloc_hard_limit: 1 << 30,
+            out_dir: None,
+        }
+    }
+
+    /// The bounds of a long run of `secs` seconds, saving findings in `out_dir`.
+    pub fn long(secs: f64, out_dir: PathBuf) -> Limits {
+        Limits {
+            max_inputs: None,
+            max_time: Some(Duration::from_secs_f64(secs.max(0.0))),
+            time_base: Duration::from_millis(250),
+            time_per_byte: Duration::from_micros(1),
+            hang: Duration::from_secs(20),
+            alloc_floor: 8 << 20,
+            alloc_hard_limit: 1 << 30,
+            out_dir: Some(out_dir),
+        }
+    }
+}
+
+/// One input that broke a rule, shrunk where the rule is a panic.
+#[derive(Clone, Debug)]
+pub struct Finding {
+    /// What happened: the panic message, the time, the bytes.
+    pub what: String,
+    /// The (smallest found) input.
+    pub input: Vec<u8>,
+}
+
+/// What a run found.
+#[derive(Clone, Debug, Default)]
+pub struct Report {
+    /// Target name.
+    pub target: String,
+    /// Inputs tried.
+    pub inputs: u64,
+    /// Inputs the reader accepted.
+    pub accepted: u64,
+    /// Inputs it refused with an error.
+    pub refused: u64,
+    /// Panics (first few kept).
+    pub panics: Vec<Finding>,
+    /// Number of panicking inputs.
+    pub n_panics: u64,
+    /// Inputs over the time bound.
+    pub slow: Vec<Finding>,
+    /// Number of slow inputs.
+    pub n_slow: u64,
+    /// Inputs over the allocation bound.
+    pub alloc: Vec<Finding>,
+    /// Number of inputs over the allocation bound.
+    pub n_alloc: u64,
+    /// Errors that do not name the file.
+    pub nameless: Vec<Finding>,
+    /// Number of such errors.
+    pub n_nameless: u64,
+    /// Most bytes live at once for one input (beyond those live before it), when counted.
+    pub peak_bytes: u64,
+    /// Largest input, bytes.
+    pub max_input: u64,
+    /// Longest time one input took.
+    pub slowest: Duration,
+    /// Wall time of the run.
+    pub elapsed: Duration,
+    /// Whether allocation was counted (the counting allocator installed).
+    pub counted: bool,
+}
+
+impl Report {
+    /// Whether the reader kept every rule.
+    pub fn clean(&self) -> bool {
+        self.n_panics == 0 && self.n_slow == 0 && self.n_alloc == 0 && self.n_nameless == 0
+    }
+
+    /// One line: the counts, the peak memory and the speed.
+    pub fn summary(&self) -> String {
+        format!(
+            "{:<20} {:>9} inputs ({:>5.1} % refused) {:>3} panics {:>3} slow {:>3} alloc {:>3} nameless  peak {:>7.1} MiB  largest {:>7.1} KiB  slowest {:>6.1} ms  {:>6.0} inputs/s",
+            self.target,
+            self.inputs,
+            100.0 * self.refused as f64 / self.inputs.max(1) as f64,
+            self.n_panics,
+            self.n_slow,
+            self.n_alloc,
+            self.n_nameless,
+            self.peak_bytes as f64 / (1u64 << 20) as f64,
+            self.max_input as f64 / 1024.0,
+            self.slowest.as_secs_f64() * 1e3,
+            self.inputs as f64 / self.elapsed.as_secs_f64().max(1e-9),
+        )
+    }
+
+    /// Every finding, with its input shown escaped (at most `max_bytes` of it).
+    pub fn details(&self, max_bytes: usize) -> String {
+        let mut s = String::new();
+        for (kind, list) in [
+            ("panic", &self.panics),
+            ("slow", &self.slow),
+            ("alloc", &self.alloc),
+            ("nameless error", &self.nameless),
+        ] {
+            for f in list {
+                s.push_str(&format!(
+                    "{} {kind}: {}\n  input ({} bytes): {}\n",
+                    self.target,
+                    f.what,
+                    f.input.len(),
+                    escape(&f.input, max_bytes)
+                ));
+            }
+        }
+        s
+    }
+}
+
+/// Bytes as a Rust byte-string literal body (printable ASCII kept, the rest `\xNN`), cut at
+/// `max` bytes.
+pub fn escape(bytes: &[u8], max: usize) -> String {
+    let mut s: String = bytes[..bytes.len().min(max)]
+        .iter()
+        .flat_map(|&b| std::ascii::escape_default(b))
+        .map(char::from)
+        .collect();
+    if bytes.len() > max {
+        s.push_str(&format!("... ({} more bytes)", bytes.len() - max));
+    }
+    s
+}
+
+/// The state shared with the watchdog and the allocation limit's callback.
+struct Current {
+    target: String,
+    input: Vec<u8>,
+    out_dir: Option<PathBuf>,
+}
+
+static CURRENT: Mutex<Option<Current>> = Mutex::new(None);
+static RUN_LOCK: Mutex<()> = Mutex::new(());
+static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Saves the input being read as `<out>/<target>-<kind>.bin` (or prints it when there is no
+/// out folder); returns where.
+fn save_current(kind: &str) -> String {
+    let cur = lock(&CURRENT);
+    let Some(c) = cur.as_ref() else {
+        return "no input".into();
+    };
+    match &c.out_dir {
+        Some(dir) => {
+            let p = dir.join(format!("{}-{kind}.bin", c.target));
+            let _ = std::fs::create_dir_all(dir);
+            match std::fs::write(&p, &c.input) {
+                Ok(()) => p.display().to_string(),
+                Err(e) => format!("(cannot save to {}: {e})", p.display()),
+            }
+        }
+        None => format!("input: {}", escape(&c.input, 2000)),
+    }
+}
+
+fn on_alloc_limit(size: usize) {
+    let at = save_current("alloc-bomb");
+    eprintln!("fuzz: a single allocation of {size} bytes was asked for; the input is saved: {at}");
+}
+
+fn save(out_dir: &Option<PathBuf>, target: &str, kind: &str, n: u64, input: &[u8]) {
+    if let Some(dir) = out_dir {
+        let _ = std::fs::create_dir_all(dir);
+        let _ = std::fs::write(dir.join(format!("{target}-{kind}-{n}.bin")), input);
+    }
+}
+
+/// Whether `read` panics on `input` (the message is in [`LAST_PANIC`]).
+fn panics(read: &Reader, input: &[u8]) -> bool {
+    catch_unwind(AssertUnwindSafe(|| read(input))).is_err()
+}
+
+/// The smallest input found that still panics: chunks removed, halving, then single bytes
+/// replaced by `0`, within `budget` tries.
+pub fn shrink(read: &Reader, input: &[u8], budget: usize) -> Vec<u8> {
+    let mut best = input.to_vec();
+    let mut tries = 0;
+    let mut chunk = best.len().div_ceil(2).max(1);
+    loop {
+        let mut i = 0;
+        while i < best.len() && tries < budget {
+            let mut cand = best.clone();
+            let end = (i + chunk).min(cand.len());
+            cand.drain(i..end);
+            tries += 1;
+            if panics(read, &cand) {
+                best = cand;
+            } else {
+                i += chunk;
+            }
+        }
+        if chunk == 1 || tries >= budget {
+            break;
+        }
+        chunk = chunk.div_ceil(2);
+    }
+    best
+}
+
+/// Runs `target` from `seed` until `limits` say stop.
+pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
+    let _one_at_a_time = lock(&RUN_LOCK);
+    alloc::Counting::install_check();
+    let counted = alloc::installed();
+    if counted {
+        alloc::set_limit(limits.alloc_hard_limit, on_alloc_limit);
+    }
+    *lock(&CURRENT) = Some(Current {
+        target: target.name.to_string(),
+        input: Vec::new(),
+        out_dir: limits.out_dir.clone(),
+    });
+
+    // Panics of this thread are recorded, not printed; others go to the previous hook.
+    let me = std::thread::current().id();
+    let previous: Arc<dyn Fn(&std::panic::PanicHookInfo<'_>) + Send + Sync> =
+        Arc::from(std::panic::take_hook());
+    let prev = previous.clone();
+    std::panic::set_hook(Box::new(move |info| {
+        if std::thread::current().id() == me {
+            *lock(&LAST_PANIC) = Some(info.to_string());
+        } else {
+            prev(info);
+        }
+    }));
+
+    // The watchdog: an input running past the hang limit is saved and the process ends.
+    let started_ms = Arc::new(AtomicU64::new(0));
+    let done = Arc::new(AtomicBool::new(false));
+    let epoch = Instant::now();
+    let watchdog = {
+        let (started_ms, done, hang) = (started_ms.clone(), done.clone(), limits.hang);
+        let name = target.name;
+        std::thread::spawn(move || {
+            while !done.load(Ordering::Relaxed) {
+                std::thread::sleep(Duration::from_millis(50));
+                let s = started_ms.load(Ordering::Relaxed);
+                let now = epoch.elapsed().as_millis() as u64;
+                if s > 0 && now.saturating_sub(s) > hang.as_millis() as u64 {
+                    let at = save_current("hang");
+                    eprintln!(
+                        "fuzz: {name}: an input has run for more than {} s (a hang); saved: {at}",
+                        hang.as_secs_f64()
+                    );
+                    std::process::exit(70);
+                }
+            }
+        })
+    };
+
+    let mut rng = Rng::new(seed);
+    let mut report = Report {
+        target: target.name.to_string(),
+        counted,
+        ..Report::default()
+    };
+    let t0 = Instant::now();
+    const KEEP: usize = 3;
+    loop {
+        if limits.max_inputs.is_some_and(|n| report.inputs >= n)
+            || limits.max_time.is_some_and(|t| t0.elapsed() >= t)
+        {
+            break;
+        }
+        let mut input = target.mutator.input(&mut rng);
+        if let Some(fix) = target.fixup {
+            if !rng.one_in(8) {
+                fix(&mut input);
+            }
+        }
+        if let Some(c) = lock(&CURRENT).as_mut() {
+            c.input.clear();
+            c.input.extend_from_slice(&input);
+        }
+        report.inputs += 1;
+        report.max_input = report.max_input.max(input.len() as u64);
+
+        let base = alloc::reset_peak();
+        started_ms.store(epoch.elapsed().as_millis().max(1) as u64, Ordering::Relaxed);
+        let t = Instant::now();
+        let result = catch_unwind(AssertUnwindSafe(|| (target.read)(&input)));
+        let took = t.elapsed();
+        started_ms.store(0, Ordering::Relaxed);
+        let peak = (alloc::peak() - base).max(0) as u64;
+
+        report.slowest = report.slowest.max(took);
+        report.peak_bytes = report.peak_bytes.max(peak);
+        match result {
+            Ok(Ok(())) => report.accepted += 1,
+            Ok(Err(msg)) => {
+                report.refused += 1;
+                if !target.file.is_empty() && !msg.contains(target.file) {
+                    report.n_nameless += 1;
+                    if report.nameless.len() < KEEP {
+                        report.nameless.push(Finding {
+                            what: format!("error without the file name: {msg}"),
+                            input: input.clone(),
+                        });
+                    }
+                }
+            }
+            Err(_) => {
+                report.n_panics += 1;
+                let msg = lock(&LAST_PANIC).take().unwrap_or_default();
+                save(
+                    &limits.out_dir,
+                    target.name,
+                    "panic",
+                    report.n_panics,
+                    &input,
+                );
+                if report.panics.len() < KEEP {
+                    let small = shrink(&target.read, &input, 3000);
+                    report.panics.push(Finding {
+                        what: msg,
+                        input: small,
+                    });
+                }
+            }
+        }
+        let allowed = limits.time_base + limits.time_per_byte * input.len() as u32;
+        if took > allowed {
+            report.n_slow += 1;
+            save(&limits.out_dir, target.name, "slow", report.n_slow, &input);
+            if report.slow.len() < KEEP {
+                report.slow.push(Finding {
+                    what: format!(
+                        "{:.1} ms for {} bytes (allowed {:.1} ms)",
+                        took.as_secs_f64() * 1e3,
+                        input.len(),
+                        allowed.as_secs_f64() * 1e3
+                    ),
+                    input: input.clone(),
+                });
+            }
+        }
+        let bound = limits.alloc_floor as f64 + target.alloc_factor * input.len() as f64;
+        if counted && peak as f64 > bound {
+            report.n_alloc += 1;
+            save(
+                &limits.out_dir,
+                target.name,
+                "alloc",
+                report.n_alloc,
+                &input,
+            );
+            if report.alloc.len() < KEEP {
+                report.alloc.push(Finding {
+                    what: format!(
+                        "{peak} bytes live for a {}-byte input (allowed {bound:.0})",
+                        input.len()
+                    ),
+                    input: input.clone(),
+                });
+            }
+        }
+    }
+    report.elapsed = t0.elapsed();
+    done.store(true, Ordering::Relaxed);
+    let _ = watchdog.join();
+    let _ = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| previous(info)));
+    if counted {
+        alloc::set_limit(usize::MAX, on_alloc_limit);
+    }
+    *lock(&CURRENT) = None;
+    report
+}
+
+/// A scratch folder for the readers that take a path: under `/dev/shm` when it exists (no
+/// disk writes for millions of inputs), else the system's temporary folder; one per process.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let shm = Path::new("/dev/shm");
+    let base = if shm.is_dir() {
+        shm.to_path_buf()
+    } else {
+        std::env::temp_dir()
+    };
+    let dir = base.join(format!("noisefree-fuzz-{name}-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    dir
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn target(read: Reader) -> Target {
+        Target {
+            name: "t",
+            about: "test",
+            file: "f.txt",
+            mutator: Mutator::new(vec![b"12 34\n56 78\n".to_vec()], vec![]),
+            fixup: None,
+            alloc_factor: 4.0,
+            read,
+        }
+    }
+
+    #[test]
+    fn panics_are_caught_counted_and_shrunk() {
+        let t = target(Box::new(|b: &[u8]| {
+            if b.contains(&b'9') {
+                panic!("a nine");
+            }
+            Err("f.txt:1: no".into())
+        }));
+        let r = run(&t, 1, &Limits::ci(2000));
+        assert_eq!(r.inputs, 2000);
+        assert!(r.n_panics > 0, "{}", r.summary());
+        assert!(r.panics[0].what.contains("a nine"), "{}", r.panics[0].what);
+        assert_eq!(r.panics[0].input, b"9");
+        assert_eq!(r.n_nameless, 0);
+        assert!(!r.clean());
+    }
+
+    #[test]
+    fn errors_without_the_file_name_are_findings() {
+        let t = target(Box::new(|_: &[u8]| Err("line 1: bad".into())));
+        let r = run(&t, 2, &Limits::ci(50));
+        assert_eq!((r.n_nameless, r.refused), (50, 50));
+    }
+}

@@ -1,0 +1,68 @@
+//! Repairs applied to mutated inputs so that mutations reach the parser behind a checksum: the
+//! binary vocabulary's trailing FNV-1a 64, and every PNG chunk's CRC-32. Without them nearly
+//! every mutation of these formats would stop at the checksum test, which is worth fuzzing once
+//! and not a million times.
+
+/// FNV-1a 64 of `b`, the binary vocabulary's checksum.
+fn fnv1a(b: &[u8]) -> u64 {
+    b.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &x| {
+        (h ^ u64::from(x)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// Rewrites the last 8 bytes of a binary vocabulary as the checksum of the bytes before them.
+pub fn vocabulary_checksum(b: &mut [u8]) {
+    if b.len() >= 8 {
+        let n = b.len() - 8;
+        let sum = fnv1a(&b[..n]);
+        b[n..].copy_from_slice(&sum.to_le_bytes());
+    }
+}
+
+/// CRC-32 (IEEE, as PNG uses it).
+pub fn crc32(b: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &x in b {
+        c ^= u32::from(x);
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+/// Recomputes the CRC of every whole chunk of a PNG (signature, then length, type, data, CRC),
+/// stopping at the first chunk that runs past the end.
+pub fn png_crcs(b: &mut [u8]) {
+    let mut at = 8;
+    while at + 12 <= b.len() {
+        let len = u32::from_be_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as usize;
+        let Some(end) = (at + 8).checked_add(len) else {
+            return;
+        };
+        if end + 4 > b.len() {
+            return;
+        }
+        let crc = crc32(&b[at + 4..end]);
+        b[end..end + 4].copy_from_slice(&crc.to_be_bytes());
+        at = end + 4;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc32_of_the_png_iend_chunk() {
+        // Every PNG ends with the same IEND chunk: type `IEND`, no data, CRC ae426082.
+        assert_eq!(crc32(b"IEND"), 0xae42_6082);
+        let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\0IEND\0\0\0\0".to_vec();
+        png_crcs(&mut png);
+        assert_eq!(&png[16..], &[0xae, 0x42, 0x60, 0x82]);
+    }
+}

@@ -1,0 +1,507 @@
+//! The fuzz targets of the library crates' readers: each writes its input where the reader
+//! expects a file (in a scratch folder, under the file's usual name) and calls the reader as
+//! noisefree does, then uses what it read the way the next step would (a vocabulary quantises
+//! descriptors, a settings file builds its rectification), so that a value which parses but
+//! breaks that step is found too. Seeds are real files (`seeds/`) and the files noisefree's
+//! own writers produce.
+
+use crate::engine::driver::{scratch_dir, Target};
+use crate::engine::mutate::Mutator;
+use crate::fixup;
+use ate_eval::io as traj;
+use ate_eval::StampPolicy;
+use datasets::settings::{self, CameraSettings, SettingsFormat};
+use nalgebra::Isometry3;
+use slam_core::place::vocabulary::{NodeRecord, Vocabulary, Weighting};
+use slam_core::{Camera, SensorKind};
+use std::path::{Path, PathBuf};
+
+/// Bytes of a seed file of `seeds/`.
+macro_rules! seed {
+    ($name:literal) => {
+        include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/seeds/", $name)).to_vec()
+    };
+}
+
+fn words(list: &[&str]) -> Vec<Vec<u8>> {
+    list.iter().map(|s| s.as_bytes().to_vec()).collect()
+}
+
+/// A reader of a file named `name`: the input is written there, then `read` runs on the path.
+fn on_file(
+    name: &'static str,
+    read: impl Fn(&Path) -> Result<(), String> + Send + Sync + 'static,
+) -> crate::engine::driver::Reader {
+    let dir = scratch_dir("lib");
+    let path = dir.join(name);
+    Box::new(move |bytes: &[u8]| {
+        std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        read(&path)
+    })
+}
+
+fn target(
+    name: &'static str,
+    about: &'static str,
+    file: &'static str,
+    seeds: Vec<Vec<u8>>,
+    dictionary: &[&str],
+    read: crate::engine::driver::Reader,
+) -> Target {
+    Target {
+        name,
+        about,
+        file,
+        mutator: Mutator::new(seeds, words(dictionary)),
+        fixup: None,
+        alloc_factor: 16.0,
+        read,
+    }
+}
+
+fn e(err: impl std::fmt::Display) -> String {
+    err.to_string()
+}
+
+/// The TUM trajectory seeds as KITTI poses (noisefree's writer).
+fn kitti_seeds() -> Vec<Vec<u8>> {
+    let dir = scratch_dir("seed");
+    let p = dir.join("seed.txt");
+    let mut out = Vec::new();
+    for s in [seed!("tum-orbslam2.txt"), seed!("euroc-cam0.tum.txt")] {
+        if std::fs::write(&p, &s).is_ok() {
+            if let Ok(t) = traj::read_tum(&p) {
+                out.push(traj::format_kitti(&t).into_bytes());
+            }
+        }
+    }
+    out
+}
+
+fn kitti_times_seed() -> Vec<u8> {
+    (0..30)
+        .map(|i| format!("{:.6e}\n", i as f64 * 0.1))
+        .collect::<String>()
+        .into_bytes()
+}
+
+/// Settings files of every layout noisefree writes: ORB-SLAM2 and ORB-SLAM3, RGB-D and
+/// stereo (rectified, raw with the real EuRoC rig), at a small and the real size.
+fn settings_seeds() -> Vec<Vec<u8>> {
+    let mut out = Vec::new();
+    let mut small_stereo = Camera::euroc_rectified();
+    (small_stereo.width, small_stereo.height) = (64, 40);
+    let mut small_rgbd = Camera::tum_fr1();
+    (small_rgbd.width, small_rgbd.height) = (64, 48);
+    let mut cams = vec![
+        CameraSettings::of_camera(&Camera::tum_fr1(), Some(5000.0), None),
+        CameraSettings::of_camera(&small_rgbd, Some(5208.0), None),
+        CameraSettings::of_camera(&small_stereo, None, None),
+    ];
+    // The real EuRoC rig (raw cameras and rectification) from the seeds' sensor.yaml files.
+    let dir = scratch_dir("seed");
+    let (l, r) = (dir.join("cam0.yaml"), dir.join("cam1.yaml"));
+    if std::fs::write(&l, seed!("euroc-cam0-sensor.yaml")).is_ok()
+        && std::fs::write(&r, seed!("euroc-cam1-sensor.yaml")).is_ok()
+    {
+        if let (Ok(mut a), Ok(mut b)) = (
+            datasets::euroc::read_sensor_yaml(&l),
+            datasets::euroc::read_sensor_yaml(&r),
+        ) {
+            // At a tenth of the size, so that building its rectification stays cheap.
+            for c in [&mut a, &mut b] {
+                (c.width, c.height) = (75, 48);
+                (c.fx, c.fy, c.cx, c.cy) = (c.fx / 10.0, c.fy / 10.0, c.cx / 10.0, c.cy / 10.0);
+            }
+            if let Ok(rect) = datasets::rectify::StereoRectification::new(&a, &b) {
+                cams.push(CameraSettings::of_camera(
+                    &rect.camera(35.0),
+                    None,
+                    Some(&rect),
+                ));
+            }
+        }
+    }
+    for c in &cams {
+        for f in [SettingsFormat::Orbslam2, SettingsFormat::Orbslam3] {
+            out.push(settings::write_settings(c, f, "fuzz seed").into_bytes());
+        }
+    }
+    out
+}
+
+/// Small vocabularies in both forms: a complete k = 3, L = 3 tree and a ragged k = 4 one.
+fn vocabularies() -> Vec<Vocabulary> {
+    let mut out = Vec::new();
+    for (k, levels, ragged) in [(3usize, 3usize, false), (4, 3, true)] {
+        let mut nodes = Vec::new();
+        let mut frontier = vec![0u32];
+        let mut next_id = 1u32;
+        for depth in 1..=levels {
+            let mut next = Vec::new();
+            for &p in &frontier {
+                let n = if ragged {
+                    2 + (p as usize % (k - 1))
+                } else {
+                    k
+                };
+                for c in 0..n {
+                    let leaf = depth == levels || (ragged && c == 0 && depth > 1);
+                    let id = next_id;
+                    next_id += 1;
+                    let byte = (id as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                    nodes.push(NodeRecord {
+                        parent: p,
+                        is_leaf: leaf,
+                        descriptor: [byte, byte.rotate_left(13), byte ^ 0xffff, !byte],
+                        weight: if leaf {
+                            0.5 + (id % 7) as f64 * 0.25
+                        } else {
+                            0.0
+                        },
+                    });
+                    if !leaf {
+                        next.push(id);
+                    }
+                }
+            }
+            frontier = next;
+        }
+        if let Ok(v) = Vocabulary::from_nodes(k, levels, Weighting::TfIdf, &nodes) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// Uses a vocabulary read from an input as place recognition does: quantises descriptors.
+fn use_vocabulary(v: &Vocabulary) {
+    let descriptors: Vec<_> = (0..8u64)
+        .map(|i| {
+            let x = i.wrapping_mul(0x2545_f491_4f6c_dd1d);
+            [x, !x, x.rotate_left(7), x ^ 0x5555]
+        })
+        .collect();
+    let _ = v.transform(&descriptors, 4);
+}
+
+/// Small images of every pixel format the readers meet (grey, grey+alpha, RGB, RGBA; 8 and 16
+/// bit), cut from a real EuRoC frame when it is at hand, else a rendered gradient.
+fn image_seeds(format: image::ImageFormat) -> Vec<Vec<u8>> {
+    let (w, h) = (24u32, 16u32);
+    let grey: Vec<u8> = (0..w * h)
+        .map(|i| ((i % w) * 9 + (i / w) * 5) as u8)
+        .collect();
+    let mut out = Vec::new();
+    let mut push = |img: image::DynamicImage| {
+        let mut buf = std::io::Cursor::new(Vec::new());
+        if img.write_to(&mut buf, format).is_ok() {
+            out.push(buf.into_inner());
+        }
+    };
+    let luma = image::GrayImage::from_raw(w, h, grey.clone()).map(image::DynamicImage::ImageLuma8);
+    if let Some(l) = luma {
+        push(l.clone());
+        push(image::DynamicImage::ImageRgb8(l.to_rgb8()));
+        if format == image::ImageFormat::Png {
+            push(image::DynamicImage::ImageRgba8(l.to_rgba8()));
+            push(image::DynamicImage::ImageLumaA8(l.to_luma_alpha8()));
+            push(image::DynamicImage::ImageLuma16(l.to_luma16()));
+            push(image::DynamicImage::ImageRgb16(l.to_rgb16()));
+            let mut tiny = l.clone();
+            tiny = tiny.crop_imm(0, 0, 1, 1);
+            push(tiny);
+        }
+    }
+    out
+}
+
+/// Every target of the library crates' readers.
+pub fn all() -> Vec<Target> {
+    let tum_list_words = ["rgb/", ".png", "depth/", "# timestamp filename"];
+    let traj_words = ["# timestamp tx ty tz qx qy qz qw", "1311868229.5494"];
+    let yaml_words = [
+        "%YAML:1.0",
+        "T_BS:",
+        "data:",
+        "rows:",
+        "cols:",
+        "resolution:",
+        "intrinsics:",
+        "distortion_coefficients:",
+        "rate_hz:",
+        "camera_model:",
+        "distortion_model:",
+        "pinhole",
+        "radial-tangential",
+    ];
+    let settings_words = [
+        "Camera.fx:",
+        "Camera.width:",
+        "Camera.height:",
+        "Camera.bf:",
+        "ThDepth:",
+        "DepthMapFactor:",
+        "ORBextractor.scaleFactor:",
+        "ORBextractor.nLevels:",
+        "ORBextractor.nFeatures:",
+        "ORBextractor.iniThFAST:",
+        "File.version:",
+        "Camera.type:",
+        "\"PinHole\"",
+        "\"Rectified\"",
+        "Stereo.b:",
+        "Stereo.T_c1_c2:",
+        "LEFT.K:",
+        "RIGHT.R:",
+        "LEFT.P:",
+        "!!opencv-matrix",
+        "rows: 3",
+        "cols: 3",
+        "rows: 4000000000",
+        "data: [",
+    ];
+    let mut out = vec![
+        target(
+            "tum-list",
+            "TUM RGB-D rgb.txt / depth.txt (datasets::tum::read_list)",
+            "rgb.txt",
+            vec![seed!("tum-rgb.txt"), seed!("tum-depth.txt")],
+            &tum_list_words,
+            on_file("rgb.txt", |p| {
+                datasets::tum::read_list(p).map(|_| ()).map_err(e)
+            }),
+        ),
+        target(
+            "tum-associations",
+            "ORB-SLAM2 associations.txt (datasets::tum::read_associations)",
+            "associations.txt",
+            vec![seed!("tum-associations.txt")],
+            &tum_list_words,
+            on_file("associations.txt", |p| {
+                datasets::tum::read_associations(p).map(|_| ()).map_err(e)
+            }),
+        ),
+        target(
+            "tum-trajectory",
+            "TUM trajectories (ate_eval::io::read_tum_loaded, every stamp policy)",
+            "trajectory.txt",
+            vec![
+                seed!("tum-groundtruth.txt"),
+                seed!("tum-groundtruth-repeat.txt"),
+                seed!("tum-orbslam2.txt"),
+                seed!("euroc-cam0.tum.txt"),
+            ],
+            &traj_words,
+            on_file("trajectory.txt", |p| {
+                for policy in [StampPolicy::LastWins, StampPolicy::KeepAll] {
+                    traj::read_tum_loaded(p, policy).map_err(e)?;
+                }
+                traj::read_tum_loaded(p, StampPolicy::Strict)
+                    .map(|_| ())
+                    .map_err(e)
+            }),
+        ),
+        target(
+            "euroc-groundtruth",
+            "EuRoC ground-truth CSV (ate_eval::io::read_euroc_loaded)",
+            "data.csv",
+            vec![seed!("euroc-groundtruth.csv")],
+            &["#timestamp [ns]", "1403715274312143104"],
+            on_file("data.csv", |p| {
+                traj::read_euroc_loaded(p, StampPolicy::LastWins)
+                    .map(|_| ())
+                    .map_err(e)
+            }),
+        ),
+        target(
+            "kitti-poses",
+            "KITTI poses (ate_eval::io::read_kitti_loaded)",
+            "poses.txt",
+            kitti_seeds(),
+            &["1.000000000e0", "0.000000000e0"],
+            on_file("poses.txt", |p| {
+                traj::read_kitti_loaded(p, None, StampPolicy::LastWins)
+                    .map(|_| ())
+                    .map_err(e)
+            }),
+        ),
+        {
+            // KITTI times.txt beside a fixed, valid pose file of as many lines.
+            let dir = scratch_dir("lib");
+            let poses = dir.join("kitti-poses-for-times.txt");
+            let first = kitti_seeds().into_iter().next().unwrap_or_default();
+            let _ = std::fs::write(&poses, first);
+            target(
+                "kitti-times",
+                "KITTI times.txt (ate_eval::io::read_kitti_loaded with times)",
+                "times.txt",
+                vec![kitti_times_seed()],
+                &[],
+                on_file("times.txt", move |p| {
+                    traj::read_kitti_loaded(&poses, Some(p), StampPolicy::KeepAll)
+                        .map(|_| ())
+                        .map_err(e)
+                }),
+            )
+        },
+        target(
+            "euroc-camera-csv",
+            "EuRoC cam0/cam1 data.csv (datasets::euroc::read_camera_csv)",
+            "data.csv",
+            vec![seed!("euroc-cam0-data.csv")],
+            &["#timestamp [ns],filename", ".png"],
+            on_file("data.csv", |p| {
+                datasets::euroc::read_camera_csv(p).map(|_| ()).map_err(e)
+            }),
+        ),
+        {
+            let right = scratch_dir("lib").join("right-sensor.yaml");
+            let _ = std::fs::write(&right, seed!("euroc-cam1-sensor.yaml"));
+            target(
+                "euroc-sensor-yaml",
+                "EuRoC sensor.yaml (datasets::euroc::read_sensor_yaml, ate_eval's T_BS reader, the rectification)",
+                "sensor.yaml",
+                vec![
+                    seed!("euroc-cam0-sensor.yaml"),
+                    seed!("euroc-cam1-sensor.yaml"),
+                    seed!("euroc-imu0-sensor.yaml"),
+                ],
+                &yaml_words,
+                on_file("sensor.yaml", move |p| {
+                    let t = traj::read_euroc_t_bs(p);
+                    let left = datasets::euroc::read_sensor_yaml(p).map_err(e)?;
+                    t.map_err(e)?;
+                    let mut r = datasets::euroc::read_sensor_yaml(&right).map_err(e)?;
+                    (r.width, r.height) = (left.width, left.height);
+                    // The rectification's maps cost a pass over the image: small sizes only.
+                    if u64::from(left.width) * u64::from(left.height) <= 100 * 100 {
+                        datasets::rectify::StereoRectification::new(&left, &r)
+                            .map_err(|err| format!("{}: {err}", p.display()))?;
+                    }
+                    Ok(())
+                }),
+            )
+        },
+        target(
+            "settings-yaml",
+            "ORB-SLAM2 / ORB-SLAM3 settings YAML (datasets::settings::read_settings, RGB-D and stereo, and the rectification it gives)",
+            "settings.yaml",
+            settings_seeds(),
+            &settings_words,
+            on_file("settings.yaml", |p| {
+                let mut last = Ok(());
+                for sensor in [SensorKind::Rgbd, SensorKind::Stereo] {
+                    match settings::read_settings(p, sensor) {
+                        Ok(s) => {
+                            let c = &s.camera;
+                            if u64::from(c.width) * u64::from(c.height) <= 200 * 200
+                                && sensor == SensorKind::Stereo
+                            {
+                                s.rectification(p, Isometry3::identity()).map_err(e)?;
+                            }
+                        }
+                        Err(err) => last = Err(e(err)),
+                    }
+                }
+                last
+            }),
+        ),
+        {
+            let seeds = vocabularies()
+                .iter()
+                .map(|v| v.to_text().into_bytes())
+                .collect();
+            target(
+                "vocab-text",
+                "DBoW2 text vocabulary, ORBvoc.txt's form (slam_core Vocabulary::from_bytes), then quantising",
+                "",
+                seeds,
+                &["10 6 0 0", "0 1", "1 0"],
+                Box::new(|b: &[u8]| {
+                    let v = Vocabulary::from_bytes(b).map_err(e)?;
+                    use_vocabulary(&v);
+                    Ok(())
+                }),
+            )
+        },
+        {
+            let seeds = vocabularies().iter().map(|v| v.to_binary()).collect();
+            let mut t = target(
+                "vocab-binary",
+                "noisefree binary vocabulary (slam_core Vocabulary::from_bytes, checksum repaired after mutation), then quantising",
+                "",
+                seeds,
+                &["NFVOCAB1"],
+                Box::new(|b: &[u8]| {
+                    let v = Vocabulary::from_bytes(b).map_err(e)?;
+                    use_vocabulary(&v);
+                    Ok(())
+                }),
+            );
+            t.fixup = Some(fixup::vocabulary_checksum);
+            t
+        },
+        {
+            let mut t = target(
+                "png-gray",
+                "PNG images, any pixel format, to 8-bit grey (datasets::decode::read_gray)",
+                "image.png",
+                image_seeds(image::ImageFormat::Png),
+                &["IHDR", "IDAT", "IEND", "PLTE", "tRNS"],
+                on_file("image.png", |p| {
+                    datasets::decode::read_gray(p).map(|_| ()).map_err(e)
+                }),
+            );
+            t.fixup = Some(fixup::png_crcs);
+            t.alloc_factor = IMAGE_ALLOC_FACTOR;
+            t
+        },
+        {
+            let mut t = target(
+                "png-depth",
+                "16-bit depth PNG to metres (datasets::decode::read_depth)",
+                "depth.png",
+                image_seeds(image::ImageFormat::Png),
+                &["IHDR", "IDAT", "IEND"],
+                on_file("depth.png", |p| {
+                    datasets::decode::read_depth(p, 5000.0)
+                        .map(|_| ())
+                        .map_err(e)
+                }),
+            );
+            t.fixup = Some(fixup::png_crcs);
+            t.alloc_factor = IMAGE_ALLOC_FACTOR;
+            t
+        },
+        {
+            let mut seeds = image_seeds(image::ImageFormat::Jpeg);
+            seeds.extend(image_seeds(image::ImageFormat::Png).into_iter().take(2));
+            let mut t = target(
+                "image-any",
+                "PNG or JPEG of `noisefree features` (datasets::decode::read_image)",
+                "image.jpg",
+                seeds,
+                &[],
+                on_file("image.jpg", |p| {
+                    datasets::decode::read_image(p).map(|_| ()).map_err(e)
+                }),
+            );
+            t.alloc_factor = IMAGE_ALLOC_FACTOR;
+            t
+        },
+    ];
+    out.sort_by_key(|t| t.name);
+    out
+}
+
+/// Bytes an image reader may hold per input byte: a file holds at most
+/// [`datasets::decode::MAX_PIXELS_PER_BYTE`] pixels a byte (deflate's 1032:1 at 8 pixels a
+/// byte), and a pixel is held decoded and converted in at most 4 bytes at once (1-bit and
+/// 8-bit grey to grey; 16-bit depth as u16 and f32).
+pub const IMAGE_ALLOC_FACTOR: f64 = datasets::decode::MAX_PIXELS_PER_BYTE as f64 * 4.0;
+
+/// Where the targets write their inputs (for the report).
+pub fn scratch() -> PathBuf {
+    scratch_dir("lib")
+}
