@@ -1,5 +1,5 @@
 # noisefree — common tasks. `make help` lists them.
-.PHONY: help run test bench lint layers fmt results golden vocabulary
+.PHONY: help run test bench lint layers fmt results golden vocabulary fuzz
 
 help:
 	@echo "make run    - run the SLAM system on the embedded synthetic default (release build)"
@@ -11,6 +11,8 @@ help:
 	@echo "make golden - rewrite tests/golden/regression.toml (only for an intended change; see README)"
 	@echo "make vocabulary - retrain assets/vocabulary/noisefree-k10L5.voc (renders + real EuRoC frames)"
 	@echo "make results - the committed synthetic sweep: all presets x 4 configs x 10 runs, then tables + figures"
+	@echo "make fuzz   - every reader's fuzz target for FUZZ_SECS s (default 60) from FUZZ_SEED (default 0),"
+	@echo "              one thread; findings in target/fuzz, totals appended to results/fuzz/tally.tsv"
 
 run:
 	cargo run --release -- run
@@ -60,3 +62,17 @@ vocabulary:
 	  --images $$(for d in $(VOC_TRAIN)/*/; do if [ -d $$d/rgb ]; then echo $$d/rgb; else echo $$d/mav0/cam0/data; fi; done) \
 	  $(EUROC_HEAD)/cam0/data $(EUROC_HEAD)/cam1/data \
 	  -o assets/vocabulary/noisefree-k10L5.voc
+
+# Every file format noisefree reads, fuzzed (issue 45): the library readers through the fuzz
+# crate's binary, the CLI's own (runs.csv, config / systems TOML, golden file, vocabulary file)
+# through the binary crate's ignored test. The dev profile on purpose: arithmetic overflow
+# panics there, as under cargo-fuzz's debug assertions. One thread; FUZZ_SECS is per target.
+FUZZ_SECS ?= 60
+FUZZ_SEED ?= 0
+FUZZ_TALLY ?= results/fuzz/tally.tsv
+fuzz:
+	cargo build -p fuzz
+	./target/debug/fuzz --target all --secs $(FUZZ_SECS) --seed $(FUZZ_SEED) --tally $(FUZZ_TALLY)
+	FUZZ_SECS=$(FUZZ_SECS) FUZZ_SEED=$(FUZZ_SEED) FUZZ_TALLY=$(abspath $(FUZZ_TALLY)) \
+	  cargo test -p noisefree --bin noisefree fuzz_cli_long -- --ignored --nocapture --test-threads=1
+	./target/debug/fuzz --summarize $(FUZZ_TALLY)

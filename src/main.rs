@@ -7,6 +7,8 @@ mod commands;
 mod config_file;
 mod external;
 mod figures;
+#[cfg(test)]
+mod fuzz_cli;
 mod regress;
 mod resilience;
 mod runner;

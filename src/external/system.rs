@@ -149,6 +149,9 @@ pub struct Resolved {
 /// Default per-run timeout.
 pub const DEFAULT_TIMEOUT_S: f64 = 3600.0;
 
+/// Longest per-run timeout accepted, seconds (a year).
+pub const MAX_TIMEOUT_S: f64 = 31_536_000.0;
+
 impl SystemDef {
     /// The command for `sensor`, `None` when the system does not handle it.
     pub fn resolve(&self, name: &str, sensor: SensorKind) -> Result<Option<Resolved>> {
@@ -173,8 +176,13 @@ impl SystemDef {
             .timeout_s
             .or(self.timeout_s)
             .unwrap_or(DEFAULT_TIMEOUT_S);
-        if !(timeout_s.is_finite() && timeout_s > 0.0) {
-            bail!("system {name}: timeout_s must be positive, got {timeout_s}");
+        // At most a year: `Duration` holds no more than 1.8e19 s, and a mistyped 1e300 must be
+        // refused here, not panic when the run starts.
+        if !(timeout_s > 0.0 && timeout_s <= MAX_TIMEOUT_S) {
+            bail!(
+                "system {name}: timeout_s = {timeout_s}: must be > 0 and <= {MAX_TIMEOUT_S} \
+                 (a year)"
+            );
         }
         Ok(Some(Resolved {
             name: name.to_string(),

@@ -4,14 +4,16 @@
 //! ```text
 //! fuzz [--target NAME|all] [--secs N] [--inputs N] [--seed S] [--out DIR] [--tally FILE] [--list]
 //! fuzz --target NAME --replay FILE
+//! fuzz --summarize TALLY
 //! ```
+//! `--summarize` prints the totals of a tally file per target as a Markdown table (inputs,
+//! rules broken, the largest peak memory and input), the table of results/fuzz/README.md.
 //! `--replay` reads one saved input with the target's reader and prints the outcome and time.
 //! `--secs` is per target. Findings (panicking, slow, allocation-bomb inputs) are saved in
 //! `--out` (default `target/fuzz`); the exit status is 1 when any target broke a rule.
 
 use fuzz::engine::alloc::Counting;
 use fuzz::{Limits, Report};
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -27,6 +29,7 @@ struct Args {
     tally: Option<PathBuf>,
     list: bool,
     replay: Option<PathBuf>,
+    summarize: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -39,6 +42,7 @@ fn parse_args() -> Result<Args, String> {
         tally: None,
         list: false,
         replay: None,
+        summarize: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -70,10 +74,11 @@ fn parse_args() -> Result<Args, String> {
             "--tally" => a.tally = Some(PathBuf::from(value()?)),
             "--list" => a.list = true,
             "--replay" => a.replay = Some(PathBuf::from(value()?)),
+            "--summarize" => a.summarize = Some(PathBuf::from(value()?)),
             "-h" | "--help" => {
                 return Err(
                     "usage: fuzz [--target NAME|all] [--secs N] [--inputs N] [--seed S] \
-                            [--out DIR] [--tally FILE] [--list] [--replay FILE]"
+                            [--out DIR] [--tally FILE] [--list] [--replay FILE] [--summarize TALLY]"
                         .into(),
                 )
             }
@@ -83,41 +88,55 @@ fn parse_args() -> Result<Args, String> {
     Ok(a)
 }
 
-/// Appends one tab-separated line per report to `path` (header written when the file is new).
-fn tally(path: &PathBuf, seed: u64, reports: &[Report]) -> std::io::Result<()> {
-    let new = !path.exists();
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)?;
+/// Per-target totals of a tally file as a Markdown table; the tally's lines are those
+/// `append_tally` writes.
+fn summarize(path: &PathBuf) -> Result<String, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    // target -> (runs, seconds, inputs, panics, slow, alloc, nameless, peak, largest)
+    let mut totals: std::collections::BTreeMap<String, [f64; 9]> = Default::default();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let f: Vec<&str> = line.split('\t').collect();
+        let num = |k: usize| -> Result<f64, String> {
+            f.get(k).and_then(|v| v.parse::<f64>().ok()).ok_or_else(|| {
+                format!(
+                    "{}:{}: field {} is not a number",
+                    path.display(),
+                    i + 1,
+                    k + 1
+                )
+            })
+        };
+        if f.len() != 13 {
+            return Err(format!("{}:{}: expected 13 fields", path.display(), i + 1));
+        }
+        let t = totals.entry(f[0].to_string()).or_insert([0.0; 9]);
+        t[0] += 1.0;
+        t[1] += num(2)?;
+        t[2] += num(3)?;
+        for (j, k) in [(3, 6), (4, 7), (5, 8), (6, 9)] {
+            t[j] += num(k)?;
+        }
+        t[7] = t[7].max(num(10)?);
+        t[8] = t[8].max(num(11)?);
     }
-    let mut f = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)?;
-    if new {
-        writeln!(
-            f,
-            "target\tseed\tseconds\tinputs\taccepted\trefused\tpanics\tslow\talloc\tnameless\tpeak_bytes\tlargest_input\tslowest_ms"
-        )?;
+    let mut out = String::from(
+        "| target | runs | CPU time | inputs | panics | slow | over allocation | nameless errors | peak memory | largest input |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (name, t) in &totals {
+        out.push_str(&format!(
+            "| {name} | {} | {:.0} s | {} | {} | {} | {} | {} | {:.1} MiB | {:.0} KiB |\n",
+            t[0],
+            t[1],
+            t[2],
+            t[3],
+            t[4],
+            t[5],
+            t[6],
+            t[7] / f64::from(1u32 << 20),
+            t[8] / 1024.0
+        ));
     }
-    for r in reports {
-        writeln!(
-            f,
-            "{}\t{seed}\t{:.1}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{:.1}",
-            r.target,
-            r.elapsed.as_secs_f64(),
-            r.inputs,
-            r.accepted,
-            r.refused,
-            r.n_panics,
-            r.n_slow,
-            r.n_alloc,
-            r.n_nameless,
-            r.peak_bytes,
-            r.max_input,
-            r.slowest.as_secs_f64() * 1e3
-        )?;
-    }
-    Ok(())
+    Ok(out)
 }
 
 fn main() -> ExitCode {
@@ -128,6 +147,18 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if let Some(p) = &args.summarize {
+        return match summarize(p) {
+            Ok(table) => {
+                print!("{table}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("{e}");
+                ExitCode::from(2)
+            }
+        };
+    }
     let targets = fuzz::targets::all();
     if args.list {
         for t in &targets {
@@ -183,7 +214,7 @@ fn main() -> ExitCode {
         reports.push(r);
     }
     if let Some(p) = &args.tally {
-        if let Err(e) = tally(p, args.seed, &reports) {
+        if let Err(e) = fuzz::engine::driver::append_tally(p, args.seed, &reports) {
             eprintln!("{}: {e}", p.display());
         }
     }

@@ -456,6 +456,45 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
     report
 }
 
+/// Appends one tab-separated line per report to the tally file `path` (with a header when the
+/// file is new): the record of every run, from which the results' totals are summed.
+pub fn append_tally(path: &Path, seed: u64, reports: &[Report]) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let new = !path.exists();
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    let mut f = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)?;
+    if new {
+        writeln!(
+            f,
+            "target\tseed\tseconds\tinputs\taccepted\trefused\tpanics\tslow\talloc\tnameless\tpeak_bytes\tlargest_input\tslowest_ms"
+        )?;
+    }
+    for r in reports {
+        writeln!(
+            f,
+            "{}\t{seed}\t{:.1}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{:.1}",
+            r.target,
+            r.elapsed.as_secs_f64(),
+            r.inputs,
+            r.accepted,
+            r.refused,
+            r.n_panics,
+            r.n_slow,
+            r.n_alloc,
+            r.n_nameless,
+            r.peak_bytes,
+            r.max_input,
+            r.slowest.as_secs_f64() * 1e3
+        )?;
+    }
+    Ok(())
+}
+
 /// A scratch folder for the readers that take a path: under `/dev/shm` when it exists (no
 /// disk writes for millions of inputs), else the system's temporary folder; one per process.
 pub fn scratch_dir(name: &str) -> PathBuf {
