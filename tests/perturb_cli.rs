@@ -126,8 +126,8 @@ fn bad_perturbations_are_refused_before_anything_runs() {
     for (chain, needle) in [
         ("depth-nois:2", "unknown perturbation \"depth-nois\""),
         (
-            "depth-axial:200",
-            "depth-axial:200: the level must be 0 to 100",
+            "depth-axial:2000",
+            "depth-axial:2000: the level must be 0 to 1000",
         ),
         ("frame-drop:1.5", "whole number"),
         ("depth-axial", "expected family:level"),

@@ -157,7 +157,7 @@ impl Family {
     /// The valid levels: inclusive bounds, and whether only whole numbers make sense.
     pub fn range(self) -> (f64, f64, bool) {
         match self {
-            Family::DepthAxial => (0.0, 100.0, false),
+            Family::DepthAxial => (0.0, 1000.0, false),
             Family::DepthLateral => (0.0, 50.0, false),
             Family::DepthHoles => (0.0, 99.0, false),
             Family::DepthEdges => (0.0, 20.0, true),
