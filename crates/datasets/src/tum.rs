@@ -27,6 +27,10 @@ pub struct TumOptions {
 /// Default association window of TUM's `associate.py`, seconds.
 pub const MAX_DIFFERENCE: f64 = 0.02;
 
+/// Most rgb/depth candidate pairs inside the association window a folder may give per stamp
+/// of its lists: a camera of up to 200 Hz gives at most 4 in associate.py's 0.02 s window.
+const MAX_CANDIDATES_PER_STAMP: usize = 8;
+
 /// One line of a TUM list file: timestamp, file (relative to the sequence folder), line number.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ListEntry {
@@ -174,6 +178,29 @@ pub fn pairs(dir: &Path, max_difference: f64) -> Result<Vec<(ListEntry, ListEntr
     let depth = read_list(&dir.join("depth.txt"))?;
     let ta: Vec<f64> = rgb.iter().map(|e| e.stamp).collect();
     let tb: Vec<f64> = depth.iter().map(|e| e.stamp).collect();
+    // associate.py's pairing weighs every pair inside the window: a camera's stamps give a
+    // few per frame, but lists whose stamps repeat (or lie nanoseconds apart) give n_rgb x
+    // n_depth of them, time and memory quadratic in the files. Counted first, in n log n.
+    let candidates: usize = ta
+        .iter()
+        .map(|&t| {
+            let lo = tb.partition_point(|&g| g <= t - max_difference);
+            let hi = tb.partition_point(|&g| g < t + max_difference);
+            hi.saturating_sub(lo)
+        })
+        .sum();
+    if candidates > MAX_CANDIDATES_PER_STAMP * (ta.len() + tb.len()) + 1024 {
+        return Err(DatasetError::invalid(
+            dir.join("rgb.txt"),
+            format!(
+                "{candidates} rgb/depth pairs lie within the {max_difference} s association \
+                 window ({} and {} stamps): the stamps are denser than a camera's (repeated, \
+                 or nanoseconds apart)",
+                ta.len(),
+                tb.len()
+            ),
+        ));
+    }
     Ok(associate(&ta, &tb, max_difference)
         .into_iter()
         .map(|(i, j)| (rgb[i].clone(), depth[j].clone()))
@@ -338,6 +365,26 @@ mod tests {
     fn associate_respects_strict_window() {
         assert!(associate(&[0.0], &[0.02], 0.02).is_empty());
         assert_eq!(associate(&[0.0], &[0.0199], 0.02), vec![(0, 0)]);
+    }
+
+    #[test]
+    fn lists_of_one_repeated_stamp_are_refused_not_paired_in_quadratic_time() {
+        // Found by fuzzing the folder's pairing (target tum-pairs, an allocation of 1.6 GB in
+        // its first 30 s): 4000 lines of one stamp in rgb.txt and in depth.txt made 16
+        // million candidate pairs (a million lines would make 10^12).
+        let dir = tempfile::tempdir().unwrap();
+        let list = "1.0 rgb/a.png\n".repeat(4000);
+        std::fs::write(dir.path().join("rgb.txt"), &list).unwrap();
+        std::fs::write(dir.path().join("depth.txt"), &list).unwrap();
+        let e = pairs(dir.path(), MAX_DIFFERENCE).unwrap_err().to_string();
+        assert!(e.contains("rgb.txt") && e.contains("16000000"), "{e}");
+        // A real camera's lists pair as before.
+        let rgb: String = (0..4000)
+            .map(|i| format!("{} rgb/{i}.png\n", i as f64 / 30.0))
+            .collect();
+        std::fs::write(dir.path().join("rgb.txt"), &rgb).unwrap();
+        std::fs::write(dir.path().join("depth.txt"), &rgb).unwrap();
+        assert_eq!(pairs(dir.path(), MAX_DIFFERENCE).unwrap().len(), 4000);
     }
 
     #[test]

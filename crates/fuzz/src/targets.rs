@@ -272,6 +272,28 @@ pub fn all() -> Vec<Target> {
                 datasets::tum::read_list(p).map(|_| ()).map_err(e)
             }),
         ),
+        {
+            // The folder's pairing (datasets::tum::pairs): the input is both rgb.txt and
+            // depth.txt, so that dense or repeated stamps meet themselves.
+            let dir = scratch_dir("lib").join("tum-folder");
+            let _ = std::fs::create_dir_all(&dir);
+            target(
+                "tum-pairs",
+                "a TUM folder's rgb.txt / depth.txt association (datasets::tum::pairs)",
+                "rgb.txt",
+                vec![seed!("tum-rgb.txt"), seed!("tum-depth.txt")],
+                &tum_list_words,
+                Box::new(move |b: &[u8]| {
+                    for name in ["rgb.txt", "depth.txt"] {
+                        let p = dir.join(name);
+                        std::fs::write(&p, b).map_err(|err| format!("{}: {err}", p.display()))?;
+                    }
+                    datasets::tum::pairs(&dir, datasets::tum::MAX_DIFFERENCE)
+                        .map(|_| ())
+                        .map_err(e)
+                }),
+            )
+        },
         target(
             "tum-associations",
             "ORB-SLAM2 associations.txt (datasets::tum::read_associations)",
