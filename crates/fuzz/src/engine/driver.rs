@@ -138,7 +138,7 @@ pub struct Report {
     pub peak_bytes: u64,
     /// Largest input, bytes.
     pub max_input: u64,
-    /// Longest time one input took.
+    /// Longest time one input took (for an input over the bound, its fastest of three runs).
     pub slowest: Duration,
     /// Wall time of the run.
     pub elapsed: Duration,
@@ -372,7 +372,6 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
         started_ms.store(0, Ordering::Relaxed);
         let peak = (alloc::peak() - base).max(0) as u64;
 
-        report.slowest = report.slowest.max(took);
         report.peak_bytes = report.peak_bytes.max(peak);
         match result {
             Ok(Ok(())) => report.accepted += 1,
@@ -408,6 +407,20 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
             }
         }
         let allowed = limits.time_base + limits.time_per_byte * input.len() as u32;
+        // A machine shared with other work deschedules the reader now and then: an input over
+        // the bound is timed twice more, and judged by its fastest run.
+        let took = if took > allowed {
+            (0..2)
+                .map(|_| {
+                    let t = Instant::now();
+                    let _ = catch_unwind(AssertUnwindSafe(|| (target.read)(&input)));
+                    t.elapsed()
+                })
+                .fold(took, Duration::min)
+        } else {
+            took
+        };
+        report.slowest = report.slowest.max(took);
         if took > allowed {
             report.n_slow += 1;
             save(&limits.out_dir, target.name, "slow", report.n_slow, &input);
