@@ -119,6 +119,13 @@ impl LineCtx<'_> {
     ) -> Result<UnitQuaternion<f64>> {
         let q = Quaternion::new(w, x, y, z);
         let n = q.norm();
+        // Components of 1e155 and more overflow the norm: normalising by it gave a zero
+        // "unit" quaternion, accepted (found by fuzzing, `0 4 4 1 7 9e201 3 0`).
+        if !n.is_finite() {
+            return Err(self.err(format!(
+                "quaternion ({x}, {y}, {z}, {w}) has no finite norm; not a rotation"
+            )));
+        }
         if n < QUAT_MIN_NORM {
             return Err(self.err(format!("quaternion has near-zero norm ({n:.3e})")));
         }
@@ -710,6 +717,27 @@ mod tests {
         ));
         let p = tmp_file("k11.txt", "1 0 0 1 0 1 0 2 0 0 1\n");
         assert_eq!(parse_err(read_kitti(&p, None).unwrap_err()).0, 1);
+    }
+
+    #[test]
+    fn a_quaternion_whose_norm_overflows_is_refused() {
+        // Found by fuzzing (the target's check that accepted rotations are unit): qy = 9e201
+        // squared overflows, the norm is inf, and dividing by it gave (0, 0, 0, 0).
+        let p = tmp_file(
+            "q9e201.txt",
+            "0 4 4 1 7 9e201 3 0
+",
+        );
+        let (line, msg) = parse_err(read_tum(&p).unwrap_err());
+        assert_eq!(line, 1);
+        assert!(msg.contains("no finite norm"), "{msg}");
+        let p = tmp_file(
+            "q9e201.csv",
+            "1,0,0,0,9e201,0,0,0
+",
+        );
+        let (_, msg) = parse_err(read_euroc(&p).unwrap_err());
+        assert!(msg.contains("no finite norm"), "{msg}");
     }
 
     #[test]

@@ -174,6 +174,34 @@ fn vocabularies() -> Vec<Vocabulary> {
     out
 }
 
+/// What every trajectory a reader accepts must be (else the target panics, a finding):
+/// stamps finite and in time order, poses finite with unit rotations.
+fn check_trajectory(t: &ate_eval::Trajectory) {
+    assert_eq!(t.stamps.len(), t.poses.len());
+    assert!(
+        t.stamps.iter().all(|s| s.is_finite()),
+        "a stamp is not finite"
+    );
+    assert!(
+        t.stamps.windows(2).all(|w| w[0] <= w[1]),
+        "stamps out of order"
+    );
+    for p in &t.poses {
+        assert!(p.translation.vector.iter().all(|v| v.is_finite()), "{p:?}");
+        assert!((p.rotation.norm() - 1.0).abs() < 1e-9, "{p:?}");
+    }
+}
+
+/// What every settings file a reader accepts must give: the ranges noisefree can run with.
+fn check_settings(s: &CameraSettings) {
+    let c = &s.camera;
+    assert!(c.fx > 0.0 && c.fy > 0.0 && c.fx.is_finite() && c.fy.is_finite());
+    assert!(c.width <= settings::MAX_IMAGE_SIDE && c.height <= settings::MAX_IMAGE_SIDE);
+    assert!(s.orb.scale_factor > 1.0 && s.orb.scale_factor <= 4.0);
+    assert!((1..=32).contains(&s.orb.n_levels) && s.orb.n_features >= 1);
+    assert!(s.depth_factor.is_none_or(|f| f > 0.0 && f.is_finite()));
+}
+
 /// Uses a vocabulary read from an input as place recognition does: quantises descriptors.
 fn use_vocabulary(v: &Vocabulary) {
     let descriptors: Vec<_> = (0..8u64)
@@ -269,7 +297,10 @@ pub fn all() -> Vec<Target> {
             vec![seed!("tum-rgb.txt"), seed!("tum-depth.txt")],
             &tum_list_words,
             on_file("rgb.txt", |p| {
-                datasets::tum::read_list(p).map(|_| ()).map_err(e)
+                let list = datasets::tum::read_list(p).map_err(e)?;
+                assert!(list.iter().all(|l| l.stamp.is_finite() && !l.file.is_empty()));
+                assert!(list.windows(2).all(|w| w[0].stamp <= w[1].stamp));
+                Ok(())
             }),
         ),
         {
@@ -317,10 +348,10 @@ pub fn all() -> Vec<Target> {
             &traj_words,
             on_file("trajectory.txt", |p| {
                 for policy in [StampPolicy::LastWins, StampPolicy::KeepAll] {
-                    traj::read_tum_loaded(p, policy).map_err(e)?;
+                    check_trajectory(&traj::read_tum_loaded(p, policy).map_err(e)?.trajectory);
                 }
                 traj::read_tum_loaded(p, StampPolicy::Strict)
-                    .map(|_| ())
+                    .map(|l| check_trajectory(&l.trajectory))
                     .map_err(e)
             }),
         ),
@@ -332,7 +363,7 @@ pub fn all() -> Vec<Target> {
             &["#timestamp [ns]", "1403715274312143104"],
             on_file("data.csv", |p| {
                 traj::read_euroc_loaded(p, StampPolicy::LastWins)
-                    .map(|_| ())
+                    .map(|l| check_trajectory(&l.trajectory))
                     .map_err(e)
             }),
         ),
@@ -344,7 +375,7 @@ pub fn all() -> Vec<Target> {
             &["1.000000000e0", "0.000000000e0"],
             on_file("poses.txt", |p| {
                 traj::read_kitti_loaded(p, None, StampPolicy::LastWins)
-                    .map(|_| ())
+                    .map(|l| check_trajectory(&l.trajectory))
                     .map_err(e)
             }),
         ),
@@ -362,7 +393,7 @@ pub fn all() -> Vec<Target> {
                 &[],
                 on_file("times.txt", move |p| {
                     traj::read_kitti_loaded(&poses, Some(p), StampPolicy::KeepAll)
-                        .map(|_| ())
+                        .map(|l| check_trajectory(&l.trajectory))
                         .map_err(e)
                 }),
             )
@@ -393,6 +424,9 @@ pub fn all() -> Vec<Target> {
                 on_file("sensor.yaml", move |p| {
                     let t = traj::read_euroc_t_bs(p);
                     let left = datasets::euroc::read_sensor_yaml(p).map_err(e)?;
+                    assert!(left.fx > 0.0 && left.fy > 0.0 && left.rate_hz > 0.0);
+                    assert!((1..=settings::MAX_IMAGE_SIDE).contains(&left.width));
+                    assert!((1..=settings::MAX_IMAGE_SIDE).contains(&left.height));
                     t.map_err(e)?;
                     let mut r = datasets::euroc::read_sensor_yaml(&right).map_err(e)?;
                     (r.width, r.height) = (left.width, left.height);
@@ -416,6 +450,7 @@ pub fn all() -> Vec<Target> {
                 for sensor in [SensorKind::Rgbd, SensorKind::Stereo] {
                     match settings::read_settings(p, sensor) {
                         Ok(s) => {
+                            check_settings(&s);
                             let c = &s.camera;
                             if u64::from(c.width) * u64::from(c.height) <= 200 * 200
                                 && sensor == SensorKind::Stereo
