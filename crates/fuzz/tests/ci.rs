@@ -94,6 +94,13 @@ fn a_binary_vocabulary_claiming_4e9_nodes_is_refused_unallocated() {
     refused_small("vocabulary", 64 << 10, "expected", || {
         Vocabulary::from_bytes(&b).map(|_| ())
     });
+    // A depth of 1000 levels (kept in a byte per node) is refused as the text form refuses it.
+    let mut deep = voc.mutator.seeds()[0].clone();
+    deep[12..16].copy_from_slice(&1000u32.to_le_bytes());
+    fuzz::fixup::vocabulary_checksum(&mut deep);
+    refused_small("vocabulary depth", 64 << 10, "L = 1000", || {
+        Vocabulary::from_bytes(&deep).map(|_| ())
+    });
     // And 10^12 nodes in the text form's place: a header line alone holds no count, so a file
     // of a few lines is a few nodes, whatever it says.
     refused_small("text vocabulary", 64 << 10, "line", || {

@@ -526,6 +526,14 @@ impl Vocabulary {
         let u32_at = |o: usize| u32::from_le_bytes(b[o..o + 4].try_into().expect("4 bytes"));
         let k = u32_at(8) as usize;
         let levels = u32_at(12) as usize;
+        // The text form's ranges: a node's depth is kept in a byte, and 16 levels of even
+        // k = 2 are more words than any vocabulary has.
+        if !(2..=255).contains(&k) || !(1..=16).contains(&levels) {
+            return Err(err(
+                0,
+                format!("k = {k}, L = {levels}: need 2 <= k <= 255 and 1 <= L <= 16"),
+            ));
+        }
         if b[16] != SCORING_L1 {
             return Err(err(0, format!("scoring {} is not supported", b[16])));
         }
