@@ -272,12 +272,13 @@ pub fn sensor_depth(
             if !(z_true.is_finite() && z_true > 0.0) {
                 return 0.0;
             }
-            let theta = (cos_incidence[s] as f64).clamp(0.0, 1.0).acos();
+            // The incidence angle only when a component uses it (an acos per pixel otherwise).
+            let theta = || (cos_incidence[s] as f64).clamp(0.0, 1.0).acos();
             if let Some(hl) = &model.holes {
                 let cut = hl.max_range + hl.max_range_spread * k_rng.uniform(i as u64);
                 if z_true < hl.min_range
                     || z_true > cut
-                    || theta > hl.max_incidence_deg.to_radians()
+                    || theta() > hl.max_incidence_deg.to_radians()
                     || (hl.boundary_probability > 0.0
                         && is_boundary(su, sv, hl.boundary_jump)
                         && k_bnd.uniform(i as u64) < hl.boundary_probability)
@@ -294,7 +295,8 @@ pub fn sensor_depth(
                 z *= 1.0 + d.scale_error + wob;
             }
             if let Some(a) = &model.axial {
-                z += a.sigma(z_true, theta) * k_axial.normal(i as u64);
+                let t = if a.grazing { theta() } else { 0.0 };
+                z += a.sigma(z_true, t) * k_axial.normal(i as u64);
             }
             if let Some(q) = &model.quantisation {
                 let disparity = q.bf / z.max(1e-3);
