@@ -162,7 +162,7 @@ pub fn trajectories(
 /// Fig. 9: ATE of every run (dots) and the mean (bar) per sequence and configuration, on a
 /// logarithmic axis (synthetic presets span millimetres to decimetres; a linear axis flattens
 /// the easy ones to zero). Configurations in the paper's column order.
-/// `groups`: (sequence, configuration, ATEs of its runs).
+/// `groups`: (sequence, configuration or its heading, ATEs of its runs), in column order.
 pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)]) -> Result<()> {
     let mut seqs: Vec<String> = Vec::new();
     let mut cfgs: Vec<String> = Vec::new();
@@ -180,7 +180,9 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
             .position(|k| *k == c)
             .unwrap_or(usize::MAX)
     };
-    cfgs.sort_by(|a, b| rank(a).cmp(&rank(b)).then(a.cmp(b)));
+    // Stable: configurations not named above (headings, external systems) keep the order the
+    // caller gave them in.
+    cfgs.sort_by_key(|c| rank(c));
     let positive = || {
         groups
             .iter()

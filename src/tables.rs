@@ -1,8 +1,12 @@
 //! Tables in the paper's layout from a sweep's run records: Table III (mean ATE per sequence
 //! and configuration, 'F' for failure, the paper's numbers beside ours), Table I (ATE versus the
-//! AVC baseline b), Table IV (frames per second) and the MC-OR threshold grid. Each table is
-//! rendered as Markdown and CSV.
+//! AVC baseline b), Table IV (frames per second), the loops closed and the MC-OR threshold grid.
+//! Each table is rendered as Markdown for people (ATE in millimetres, decimals that follow the
+//! data, every system under the one heading [`system_label`] gives it, what it leaves out and
+//! why in its notes) and as a tidy CSV for notebooks: one row per group of runs (sequence,
+//! system, parameters) with numbers, not text (n, failed, mean, std, median, min, max, fps).
 
+use crate::resilience::system_label;
 use crate::sweep::plan::ConfigKind;
 use crate::sweep::store::{FolderSettings, RunRecord};
 use datasets::{Catalog, Class};
@@ -63,21 +67,218 @@ impl Cell {
         self.mean.is_none() || 2 * self.failed > self.runs
     }
 
-    /// `0.0123 ± 0.0010` (with `(kF)` when some runs failed), or `F`.
-    pub fn text(&self) -> String {
+    /// Mean ± std in millimetres with `decimals` decimals, `12.34 ± 0.56` (with `(kF)` when
+    /// some runs failed), or `F`.
+    pub fn text(&self, decimals: usize) -> String {
         if self.is_failure() {
             return "F".into();
         }
         let mut s = format!(
-            "{:.4} ± {:.4}",
-            self.mean.unwrap_or(0.0),
-            self.std.unwrap_or(0.0)
+            "{:.decimals$} ± {:.decimals$}",
+            self.mean.unwrap_or(0.0) * 1e3,
+            self.std.unwrap_or(0.0) * 1e3
         );
         if self.failed > 0 {
             let _ = write!(s, " ({}F)", self.failed);
         }
         s
     }
+}
+
+/// Decimals for ATEs in millimetres shown side by side: three significant digits of the smallest
+/// mean (0.970 beside 1.000, 4.61, 12.3), between 1 and 4.
+pub fn mm_decimals(means_m: impl IntoIterator<Item = f64>) -> usize {
+    let min = means_m
+        .into_iter()
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if !min.is_finite() {
+        return 2;
+    }
+    (2 - (min * 1e3).log10().floor() as i64).clamp(1, 4) as usize
+}
+
+/// The texts of a row of cells (`None`: no runs, `-`), with the decimals its means need.
+fn cell_texts(cells: &[Option<Cell>]) -> Vec<String> {
+    let d = mm_decimals(
+        cells
+            .iter()
+            .flatten()
+            .filter(|c| !c.is_failure())
+            .filter_map(|c| c.mean),
+    );
+    cells
+        .iter()
+        .map(|c| c.map_or_else(|| "-".into(), |c| c.text(d)))
+        .collect()
+}
+
+/// A group of runs summarised in one row of a tidy CSV.
+struct Group<'a> {
+    sequence: String,
+    config: String,
+    runs: Vec<&'a RunRecord>,
+}
+
+/// `v` as a CSV number (every digit an f64 needs), empty when absent.
+fn num(v: Option<f64>) -> String {
+    v.map(|x| format!("{x}")).unwrap_or_default()
+}
+
+/// Mean frames per second of a group as Table IV gives it: over every run for ours, over the
+/// runs that did not fail for an external system (a crashed program's seconds are no speed).
+fn group_fps(config: &str, runs: &[&RunRecord]) -> Option<f64> {
+    let ok: Vec<&&RunRecord> = if ConfigKind::parse(config).is_ok() {
+        runs.iter().collect()
+    } else {
+        runs.iter().filter(|r| !r.failed).collect()
+    };
+    (!ok.is_empty()).then(|| ok.iter().map(|r| r.fps).sum::<f64>() / ok.len() as f64)
+}
+
+/// The tidy CSV of `groups`: one row per group, numbers in SI units (ATE in metres).
+fn tidy_csv(groups: &[Group], labels: &BTreeMap<String, String>) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let _ = w.write_record([
+        "sequence",
+        "system",
+        "label",
+        "ours",
+        "tau_mf",
+        "tau_gf",
+        "tau_mg",
+        "baseline",
+        "n",
+        "failed",
+        "failure",
+        "mean_m",
+        "std_m",
+        "median_m",
+        "min_m",
+        "max_m",
+        "fps",
+        "cores",
+        "peak_rss_mb",
+        "loops",
+        "runs_with_loops",
+    ]);
+    for g in groups {
+        let Some(first) = g.runs.first() else {
+            continue;
+        };
+        let cell = Cell::of(&g.runs);
+        let mut ok: Vec<f64> = g
+            .runs
+            .iter()
+            .filter(|r| !r.failed)
+            .filter_map(|r| r.ate_rmse)
+            .collect();
+        ok.sort_by(f64::total_cmp);
+        let median = match ok.len() {
+            0 => None,
+            n if n % 2 == 1 => Some(ok[n / 2]),
+            n => Some(0.5 * (ok[n / 2 - 1] + ok[n / 2])),
+        };
+        let cores: Vec<f64> = g
+            .runs
+            .iter()
+            .filter_map(|r| Some(r.cpu_s? / r.wall_s).filter(|c| c.is_finite()))
+            .collect();
+        let mem = g.runs.iter().filter_map(|r| r.peak_rss_mb).reduce(f64::max);
+        let loops: Vec<usize> = g.runs.iter().filter_map(|r| r.loops).collect();
+        let _ = w.write_record([
+            g.sequence.clone(),
+            g.config.clone(),
+            system_label(&g.config, labels),
+            ConfigKind::parse(&g.config).is_ok().to_string(),
+            num(first.tau_mf),
+            num(first.tau_gf),
+            num(first.tau_mg),
+            num(first.baseline),
+            g.runs.len().to_string(),
+            cell.failed.to_string(),
+            cell.is_failure().to_string(),
+            num(cell.mean),
+            num(cell.std),
+            num(median),
+            num(ok.first().copied()),
+            num(ok.last().copied()),
+            num(group_fps(&g.config, &g.runs)),
+            num((!cores.is_empty()).then(|| cores.iter().sum::<f64>() / cores.len() as f64)),
+            num(mem),
+            if loops.is_empty() {
+                String::new()
+            } else {
+                loops.iter().sum::<usize>().to_string()
+            },
+            if loops.is_empty() {
+                String::new()
+            } else {
+                loops.iter().filter(|&&n| n > 0).count().to_string()
+            },
+        ]);
+    }
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// The groups of Table III and IV: ours at the default parameters, external systems, per
+/// sequence in table order.
+fn main_groups<'a>(
+    records: &'a [RunRecord],
+    catalog: &Catalog,
+    kinds: &[ConfigKind],
+    systems: &[(String, String)],
+) -> Vec<Group<'a>> {
+    let mut out = Vec::new();
+    for seq in sequence_order(records, catalog) {
+        let names = kinds
+            .iter()
+            .map(|k| k.name().to_string())
+            .chain(systems.iter().map(|(n, _)| n.clone()));
+        for name in names {
+            let ours = ConfigKind::parse(&name).is_ok();
+            let runs: Vec<&RunRecord> = records
+                .iter()
+                .filter(|r| r.sequence == seq && r.config == name && (!ours || is_default(r)))
+                .collect();
+            if !runs.is_empty() {
+                out.push(Group {
+                    sequence: seq.clone(),
+                    config: name,
+                    runs,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// "A, B and C".
+fn and_list(items: &[String]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    }
+}
+
+/// The headings of the systems in `records` other than `shown`, for a table's "left out" note.
+fn others(records: &[RunRecord], shown: &[&str], labels: &BTreeMap<String, String>) -> Vec<String> {
+    let mut names: Vec<&str> = records
+        .iter()
+        .map(|r| r.config.as_str())
+        .filter(|c| !shown.contains(c))
+        .collect();
+    names.sort_by_key(|n| {
+        (
+            ConfigKind::parse(n).map_or(usize::MAX, |k| {
+                ConfigKind::EVERY.iter().position(|e| *e == k).unwrap_or(0)
+            }),
+            n.to_string(),
+        )
+    });
+    names.dedup();
+    names.iter().map(|n| system_label(n, labels)).collect()
 }
 
 fn is_default(r: &RunRecord) -> bool {
@@ -141,24 +342,50 @@ fn render(title: &str, notes: &str, header: &[String], rows: &[Vec<String>]) -> 
     Rendered { markdown: md, csv }
 }
 
+/// A published figure in millimetres (the paper gives metres to the millimetre).
 fn paper_text(v: Option<datasets::Ate>) -> String {
     match v {
         None => "-".into(),
         Some(a) => match a.metres() {
-            Some(m) => format!("{m:.3}"),
+            Some(m) => format!("{:.0}", m * 1e3),
             None => "F".into(),
         },
     }
 }
 
-/// Table III: mean ATE RMSE (m) ± std over the runs, per sequence and configuration, at the
-/// default parameters; with `paper`, the published numbers beside ours.
+/// Removes the columns from `first` on that hold no value in any row (all `-`); returns their
+/// headings.
+fn drop_empty_columns(
+    header: &mut Vec<String>,
+    rows: &mut [Vec<String>],
+    first: usize,
+) -> Vec<String> {
+    let mut dropped = Vec::new();
+    let mut c = header.len();
+    while c > first {
+        c -= 1;
+        if !rows.is_empty() && rows.iter().all(|r| r.get(c).is_none_or(|t| t == "-")) {
+            dropped.insert(0, header.remove(c));
+            for r in rows.iter_mut() {
+                if c < r.len() {
+                    r.remove(c);
+                }
+            }
+        }
+    }
+    dropped
+}
+
+/// Table III: mean ATE RMSE (mm) ± std over the runs, per sequence and configuration, at the
+/// default parameters; with `paper`, the published numbers beside ours. `vocabularies`: the
+/// vocabulary each external system was given, in words (named in the notes).
 pub fn table3(
     records: &[RunRecord],
     catalog: &Catalog,
     paper: bool,
     settings: &FolderSettings,
     labels: &BTreeMap<String, String>,
+    vocabularies: &BTreeMap<String, String>,
 ) -> Rendered {
     let mapping_lag = settings.mapping_lag;
     let kinds: Vec<ConfigKind> = ConfigKind::EVERY
@@ -168,7 +395,7 @@ pub fn table3(
     let systems = external_columns(records, labels);
     let mut header = vec!["sequence".to_string(), "class".to_string()];
     for k in &kinds {
-        header.push(format!("{} (ours)", column_name(*k)));
+        header.push(system_label(k.name(), labels));
     }
     header.extend(systems.iter().map(|(_, label)| label.clone()));
     if paper {
@@ -196,28 +423,22 @@ pub fn table3(
                 .unwrap_or_else(|| seq.clone()),
             class.into(),
         ];
+        let mut cells: Vec<Option<Cell>> = Vec::new();
         for k in &kinds {
             let runs: Vec<&RunRecord> = records
                 .iter()
                 .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
                 .collect();
-            row.push(if runs.is_empty() {
-                "-".into()
-            } else {
-                Cell::of(&runs).text()
-            });
+            cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
         }
         for (name, _) in &systems {
             let runs: Vec<&RunRecord> = records
                 .iter()
                 .filter(|r| r.sequence == seq && &r.config == name)
                 .collect();
-            row.push(if runs.is_empty() {
-                "-".into()
-            } else {
-                Cell::of(&runs).text()
-            });
+            cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
         }
+        row.extend(cell_texts(&cells));
         if paper {
             for k in &kinds {
                 let p = entry
@@ -254,8 +475,11 @@ pub fn table3(
         .max()
         .map(|m| m + 1)
         .unwrap_or(0);
+    let dropped = drop_empty_columns(&mut header, &mut rows, 2);
     let notes = format!(
-        "ATE RMSE in metres, mean ± population std over the runs (seeds 0..{}), MC-OR thresholds \
+        "ATE RMSE in millimetres, mean ± population std over the runs (seeds 0..{}), decimals per \
+         row: three significant digits of its smallest mean (the tidy table3.csv has every digit, \
+         in metres). MC-OR thresholds \
          (tau_MF, tau_GF, tau_MG) = {:?} m, AVC baseline {} m. Association: evaluate_ate.py's (|dt| < 0.02 s, \
          greedy, each stamp once), SE3 Umeyama alignment; EuRoC estimates converted to the body frame. \
          'F': more than half the runs failed (fewer than 80 % of the frames tracked, or no ATE); `(kF)`: k \
@@ -296,9 +520,38 @@ pub fn table3(
             ""
         },
     );
-    let notes = match external_notes(records, &systems) {
+    let notes = match external_notes(records, &systems, vocabularies) {
         n if n.is_empty() => notes,
         n => format!("{notes} {n}"),
+    };
+    let notes = if systems.is_empty() || settings.vocabulary == "none" {
+        notes
+    } else {
+        format!(
+            "{notes} Ours ran with the vocabulary {}.",
+            settings.vocabulary
+        )
+    };
+    let other_params = records
+        .iter()
+        .filter(|r| ConfigKind::parse(&r.config).is_ok() && !is_default(r))
+        .count();
+    let notes = if other_params == 0 {
+        notes
+    } else {
+        format!(
+            "{notes} Left out: {other_params} runs of ours at other parameters than these (see \
+             Table I and the threshold grid)."
+        )
+    };
+    let notes = if dropped.is_empty() {
+        notes
+    } else {
+        format!(
+            "{notes} Left out for want of a single value: {} (the paper publishes no figure \
+             for it).",
+            and_list(&dropped)
+        )
     };
     let notes = if settings.synth_without.is_empty() {
         notes
@@ -308,7 +561,9 @@ pub fn table3(
             settings.synth_without.join(", ")
         )
     };
-    render("Table III: ATE RMSE (m)", &notes, &header, &rows)
+    let mut t = render("Table III: ATE RMSE (mm)", &notes, &header, &rows);
+    t.csv = tidy_csv(&main_groups(records, catalog, &kinds, &systems), labels);
+    t
 }
 
 /// Whether some sequence's runs used more than one synthetic realization (--vary-sequence).
@@ -346,13 +601,21 @@ pub fn external_columns(
         .collect()
 }
 
-/// What the external systems' columns are and why their failed runs failed.
-fn external_notes(records: &[RunRecord], systems: &[(String, String)]) -> String {
+/// What the external systems' columns are, which vocabulary each was given, and why their
+/// failed runs failed.
+fn external_notes(
+    records: &[RunRecord],
+    systems: &[(String, String)],
+    vocabularies: &BTreeMap<String, String>,
+) -> String {
     let mut out = Vec::new();
     for (name, label) in systems {
         let mut text = format!(
             "{label}: the external system `{name}` run by the harness on the same files (its threads' own run-to-run spread; keyframes and map points not reported)"
         );
+        if let Some(v) = vocabularies.get(name) {
+            text += &format!(", given the vocabulary {v}");
+        }
         let mut reasons: BTreeMap<(&str, &str), usize> = BTreeMap::new();
         for r in records.iter().filter(|r| &r.config == name && r.failed) {
             let why = r
@@ -387,8 +650,12 @@ pub(crate) fn column_name(k: ConfigKind) -> &'static str {
     }
 }
 
-/// Table I: ATE (m) versus the AVC baseline b, per sequence, with the baseline's ATE beside.
-pub fn table1(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {
+/// Table I: ATE (mm) versus the AVC baseline b, per sequence, with the baseline's ATE beside.
+pub fn table1(
+    records: &[RunRecord],
+    catalog: &Catalog,
+    labels: &BTreeMap<String, String>,
+) -> Option<Rendered> {
     let mut baselines: Vec<f64> = records
         .iter()
         .filter(|r| r.config == "avc")
@@ -399,41 +666,63 @@ pub fn table1(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {
     if baselines.len() < 2 {
         return None;
     }
-    let mut header = vec!["sequence".to_string(), "ORB-SLAM2".to_string()];
-    header.extend(baselines.iter().map(|b| format!("AVC b={b}")));
+    let avc = system_label("avc", labels);
+    let mut header = vec!["sequence".to_string(), system_label("orb", labels)];
+    header.extend(baselines.iter().map(|b| format!("{avc} b={b}")));
     let mut rows = Vec::new();
+    let mut groups = Vec::new();
     for seq in sequence_order(records, catalog) {
         let orb: Vec<&RunRecord> = records
             .iter()
             .filter(|r| r.sequence == seq && r.config == "orb")
             .collect();
-        let mut row = vec![
-            seq.clone(),
-            if orb.is_empty() {
-                "-".into()
-            } else {
-                Cell::of(&orb).text()
-            },
-        ];
+        let mut cells = vec![(!orb.is_empty()).then(|| Cell::of(&orb))];
+        if !orb.is_empty() {
+            groups.push(Group {
+                sequence: seq.clone(),
+                config: "orb".into(),
+                runs: orb,
+            });
+        }
         for b in &baselines {
             let runs: Vec<&RunRecord> = records
                 .iter()
                 .filter(|r| r.sequence == seq && r.config == "avc" && r.baseline == Some(*b))
                 .collect();
-            row.push(if runs.is_empty() {
-                "-".into()
-            } else {
-                Cell::of(&runs).text()
-            });
+            cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
+            if !runs.is_empty() {
+                groups.push(Group {
+                    sequence: seq.clone(),
+                    config: "avc".into(),
+                    runs,
+                });
+            }
         }
+        let mut row = vec![seq.clone()];
+        row.extend(cell_texts(&cells));
         rows.push(row);
     }
-    Some(render(
-        "Table I: ATE RMSE (m) versus the AVC baseline b (m)",
-        "",
+    let left = others(records, &["orb", "avc"], labels);
+    let notes = format!(
+        "ATE RMSE in millimetres, mean ± population std over the runs; decimals per row: three \
+         significant digits of its smallest mean.{}",
+        if left.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " Left out: {} (b is a parameter of AVC alone; they are in Table III).",
+                and_list(&left)
+            )
+        }
+    );
+    let mut t = render(
+        "Table I: ATE RMSE (mm) versus the AVC baseline b (m)",
+        &notes,
         &header,
         &rows,
-    ))
+    );
+    t.csv = tidy_csv(&groups, labels);
+    Some(t)
 }
 
 /// Table IV: mean frames per second per sequence and configuration (one thread).
@@ -448,7 +737,7 @@ pub fn table4(
         .collect();
     let systems = external_columns(records, labels);
     let mut header = vec!["sequence".to_string(), "frames".to_string()];
-    header.extend(kinds.iter().map(|k| column_name(*k).to_string()));
+    header.extend(kinds.iter().map(|k| system_label(k.name(), labels)));
     header.extend(systems.iter().map(|(_, l)| l.clone()));
     let mut rows = Vec::new();
     for seq in sequence_order(records, catalog) {
@@ -509,18 +798,25 @@ pub fn table4(
          the machine's cores, so compare columns within one sweep."
             .to_string()
     };
-    render(
-        "Table IV: frames per second (single thread, whole pipeline)",
-        &notes,
-        &header,
-        &rows,
-    )
+    let title = if systems.is_empty() {
+        "Table IV: frames per second (single thread, whole pipeline)"
+    } else {
+        "Table IV: frames per second (ours: one thread; external systems: their own threads, \
+         whole process)"
+    };
+    let mut t = render(title, &notes, &header, &rows);
+    t.csv = tidy_csv(&main_groups(records, catalog, &kinds, &systems), labels);
+    t
 }
 
 /// Loops closed per sequence and configuration: the total over the runs and in how many runs
 /// at least one closed, so a false loop on a sequence without a revisit shows at a glance.
 /// `None` when no run recorded a loop count (loop closing off, or records from before it).
-pub fn loops_table(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {
+pub fn loops_table(
+    records: &[RunRecord],
+    catalog: &Catalog,
+    labels: &BTreeMap<String, String>,
+) -> Option<Rendered> {
     if !records.iter().any(|r| r.loops.is_some()) {
         return None;
     }
@@ -529,7 +825,7 @@ pub fn loops_table(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered>
         .filter(|k| records.iter().any(|r| r.config == k.name()))
         .collect();
     let mut header = vec!["sequence".to_string()];
-    header.extend(kinds.iter().map(|k| column_name(*k).to_string()));
+    header.extend(kinds.iter().map(|k| system_label(k.name(), labels)));
     let mut rows = Vec::new();
     for seq in sequence_order(records, catalog) {
         let mut row = vec![seq.clone()];
@@ -549,18 +845,33 @@ pub fn loops_table(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered>
         }
         rows.push(row);
     }
-    Some(render(
-        "Loops closed",
+    let systems = external_columns(records, labels);
+    let mut notes = String::from(
         "Loops closed in all runs together, and in how many runs at least one closed. On a \
          sequence that never returns to a place it has seen, every loop is a false one.",
-        &header,
-        &rows,
-    ))
+    );
+    if !systems.is_empty() {
+        let names: Vec<String> = systems.iter().map(|(_, l)| l.clone()).collect();
+        let _ = write!(
+            notes,
+            " Left out: {} (an external program does not report its loop closures to the \
+             harness).",
+            and_list(&names)
+        );
+    }
+    let mut t = render("Loops closed", &notes, &header, &rows);
+    let groups: Vec<Group> = main_groups(records, catalog, &kinds, &[]);
+    t.csv = tidy_csv(&groups, labels);
+    Some(t)
 }
 
 /// The MC-OR threshold grid: mean ATE per (tau_MF, tau_GF, tau_MG) and sequence, the best triple
 /// per sequence and overall (lowest mean over sequences of the per-sequence mean ATE).
-pub fn threshold_grid(records: &[RunRecord], catalog: &Catalog) -> Option<Rendered> {
+pub fn threshold_grid(
+    records: &[RunRecord],
+    catalog: &Catalog,
+    labels: &BTreeMap<String, String>,
+) -> Option<Rendered> {
     let mut triples: Vec<(f64, f64, f64)> = records
         .iter()
         .filter(|r| r.config == "mcor")
@@ -578,24 +889,42 @@ pub fn threshold_grid(records: &[RunRecord], catalog: &Catalog) -> Option<Render
     let mut rows = Vec::new();
     let mut best_per_seq: BTreeMap<String, (f64, (f64, f64, f64))> = BTreeMap::new();
     let mut best_overall: Option<(f64, (f64, f64, f64))> = None;
+    let runs_of = |s: &str, t: &(f64, f64, f64)| -> Vec<&RunRecord> {
+        records
+            .iter()
+            .filter(|r| {
+                r.sequence == s
+                    && r.config == "mcor"
+                    && (r.tau_mf, r.tau_gf, r.tau_mg) == (Some(t.0), Some(t.1), Some(t.2))
+            })
+            .collect()
+    };
+    // One precision for the whole grid: its cells are compared across rows.
+    let d = mm_decimals(triples.iter().flat_map(|t| {
+        seqs.iter().filter_map(move |s| {
+            let c = Cell::of(&runs_of(s, t));
+            (!c.is_failure()).then_some(c.mean).flatten()
+        })
+    }));
+    let mut groups = Vec::new();
     for t in &triples {
         let mut row = vec![t.0.to_string(), t.1.to_string(), t.2.to_string()];
         let mut means = Vec::new();
         for s in &seqs {
-            let runs: Vec<&RunRecord> = records
-                .iter()
-                .filter(|r| {
-                    &r.sequence == s
-                        && r.config == "mcor"
-                        && (r.tau_mf, r.tau_gf, r.tau_mg) == (Some(t.0), Some(t.1), Some(t.2))
-                })
-                .collect();
+            let runs = runs_of(s, t);
             let c = Cell::of(&runs);
             row.push(if runs.is_empty() {
                 "-".into()
             } else {
-                c.text()
+                c.text(d)
             });
+            if !runs.is_empty() {
+                groups.push(Group {
+                    sequence: s.clone(),
+                    config: "mcor".into(),
+                    runs,
+                });
+            }
             if let (false, Some(m)) = (c.is_failure(), c.mean) {
                 means.push(m);
                 let e = best_per_seq.entry(s.clone()).or_insert((f64::INFINITY, *t));
@@ -606,7 +935,7 @@ pub fn threshold_grid(records: &[RunRecord], catalog: &Catalog) -> Option<Render
         }
         if means.len() == seqs.len() && !means.is_empty() {
             let m = means.iter().sum::<f64>() / means.len() as f64;
-            row.push(format!("{m:.4}"));
+            row.push(format!("{:.d$}", m * 1e3));
             if best_overall.is_none_or(|(b, _)| m < b) {
                 best_overall = Some((m, *t));
             }
@@ -615,23 +944,36 @@ pub fn threshold_grid(records: &[RunRecord], catalog: &Catalog) -> Option<Render
         }
         rows.push(row);
     }
-    let mut notes = String::from("Best triple per sequence: ");
+    let mut notes = String::from(
+        "ATE RMSE in millimetres, mean ± population std over the runs of w/ MC-OR (ours) at \
+         each (tau_MF, tau_GF, tau_MG) (m). Best triple per sequence: ",
+    );
     notes.push_str(
         &best_per_seq
             .iter()
-            .map(|(s, (m, t))| format!("{s} {t:?} ({m:.4} m)"))
+            .map(|(s, (m, t))| format!("{s} {t:?} ({:.d$} mm)", m * 1e3))
             .collect::<Vec<_>>()
             .join("; "),
     );
     if let Some((m, t)) = best_overall {
-        let _ = write!(notes, ". Best overall: {t:?} (mean {m:.4} m).");
+        let _ = write!(notes, ". Best overall: {t:?} (mean {:.d$} mm).", m * 1e3);
     }
-    Some(render(
-        "MC-OR threshold grid: ATE RMSE (m)",
+    let left = others(records, &["mcor"], labels);
+    if !left.is_empty() {
+        let _ = write!(
+            notes,
+            " Left out: {} (the thresholds are MC-OR's; they are in Table III).",
+            and_list(&left)
+        );
+    }
+    let mut t = render(
+        "MC-OR threshold grid: ATE RMSE (mm)",
         &notes,
         &header,
         &rows,
-    ))
+    );
+    t.csv = tidy_csv(&groups, labels);
+    Some(t)
 }
 
 #[cfg(test)]
@@ -682,6 +1024,7 @@ mod tests {
             true,
             &FolderSettings::default(),
             &BTreeMap::new(),
+            &BTreeMap::new(),
         );
         let line = |name: &str| {
             t.markdown
@@ -692,13 +1035,128 @@ mod tests {
         };
         let twin = line("twin_fr1_360");
         assert!(
-            twin.contains("twin of hard") && twin.contains("0.215"),
+            twin.contains("twin of hard") && twin.contains("| 215 |"),
             "{twin}"
         );
         let kinect = line("kinect");
         assert!(
-            kinect.contains("synthetic") && !kinect.contains("0.215"),
+            kinect.contains("synthetic") && !kinect.contains("215"),
             "{kinect}"
         );
+        // rc has no published figure: its paper column would be all dashes, and is left out.
+        let mut with_rc = records.to_vec();
+        with_rc.push(RunRecord {
+            config: "rc".into(),
+            ..record("kinect", 0.001)
+        });
+        let t = table3(
+            &with_rc,
+            &catalog,
+            true,
+            &FolderSettings::default(),
+            &BTreeMap::new(),
+            &BTreeMap::new(),
+        );
+        let header = t
+            .markdown
+            .lines()
+            .find(|l| l.starts_with("| sequence"))
+            .unwrap();
+        assert!(
+            !header.contains("rigid consensus (paper)") && header.contains("ORB-SLAM2 (paper)"),
+            "{header}"
+        );
+        assert!(
+            t.markdown.contains("Left out for want of a single value"),
+            "{}",
+            t.markdown
+        );
+    }
+
+    /// Two systems 3 % apart at 1 mm read differently in the Markdown (issue 44: both printed
+    /// 0.0010 at 0.1 mm).
+    #[test]
+    fn millimetre_results_three_percent_apart_are_told_apart() {
+        let catalog = Catalog::embedded();
+        let mut records: Vec<RunRecord> = (0..3)
+            .map(|k| RunRecord {
+                seed: k,
+                ..record("kinect", 0.00097)
+            })
+            .collect();
+        records.extend((0..3).map(|k| RunRecord {
+            seed: k,
+            config: "other".into(),
+            ..record("kinect", 0.00100)
+        }));
+        let labels = BTreeMap::from([("other".to_string(), "Other (real)".to_string())]);
+        let t = table3(
+            &records,
+            &catalog,
+            false,
+            &FolderSettings::default(),
+            &labels,
+            &BTreeMap::new(),
+        );
+        let row = t
+            .markdown
+            .lines()
+            .find(|l| l.starts_with("| kinect |"))
+            .unwrap();
+        assert!(
+            row.contains("| 0.970 ± 0.000 |") && row.contains("| 1.000 ± 0.000 |"),
+            "{row}"
+        );
+        assert_eq!(mm_decimals([0.0046]), 2);
+        assert_eq!(mm_decimals([0.0123, 0.3]), 1);
+        assert_eq!(mm_decimals([0.00004]), 4);
+    }
+
+    /// table3.csv is tidy: it loads into numbers equal to the statistics of runs.csv's
+    /// records, one row per sequence and system, with ours and external systems labelled as
+    /// in every table.
+    #[test]
+    fn the_tidy_csv_holds_the_statistics_of_the_runs_as_numbers() {
+        let catalog = Catalog::embedded();
+        let ates = [0.0041, 0.0039, 0.0047, 0.0050];
+        let mut records: Vec<RunRecord> = ates
+            .iter()
+            .enumerate()
+            .map(|(k, &a)| RunRecord {
+                seed: k as u64,
+                fps: 100.0 + k as f64,
+                ..record("kinect", a)
+            })
+            .collect();
+        records.push(RunRecord {
+            seed: 4,
+            failed: true,
+            ate_rmse: None,
+            ..record("kinect", 0.0)
+        });
+        let t = table3(
+            &records,
+            &catalog,
+            false,
+            &FolderSettings::default(),
+            &BTreeMap::new(),
+            &BTreeMap::new(),
+        );
+        let mut rdr = csv::Reader::from_reader(t.csv.as_bytes());
+        let h = rdr.headers().unwrap().clone();
+        let rows: Vec<csv::StringRecord> = rdr.records().map(Result::unwrap).collect();
+        assert_eq!(rows.len(), 1);
+        let get = |k: &str| rows[0][h.iter().position(|c| c == k).unwrap()].to_string();
+        let f = |k: &str| get(k).parse::<f64>().unwrap();
+        let mean = ates.iter().sum::<f64>() / 4.0;
+        let std = (ates.iter().map(|a| (a - mean) * (a - mean)).sum::<f64>() / 4.0).sqrt();
+        assert_eq!(get("system"), "orb");
+        assert_eq!(get("label"), "ORB-SLAM2 (ours)");
+        assert_eq!((get("n"), get("failed")), ("5".into(), "1".into()));
+        assert_eq!(f("mean_m"), mean);
+        assert_eq!(f("std_m"), std);
+        assert_eq!(f("median_m"), 0.5 * (0.0041 + 0.0047));
+        assert_eq!((f("min_m"), f("max_m")), (0.0039, 0.0050));
+        assert_eq!(f("fps"), (100.0 + 101.0 + 102.0 + 103.0 + 100.0) / 5.0);
     }
 }

@@ -87,6 +87,69 @@ def stereo_frames(seq, times):
     return out
 
 
+def setting(text, key):
+    """The value of `key: value` in an OpenCV YAML settings file, or None."""
+    for line in text.splitlines():
+        k, sep, v = line.partition(":")
+        if sep and k.strip() == key:
+            return v.split("#")[0].strip().strip('"')
+    return None
+
+
+def stereo_settings(path):
+    """The settings ORB-SLAM3 1.0 reads for a stereo pair. A `Rectified` pair crashes it (its
+    Settings printer dereferences the absent second calibration: a segmentation fault before
+    the first frame), so a rectified pair is handed over as the `PinHole` pair it is: both
+    cameras with camera 1's intrinsics and no distortion, camera 2 at (b, 0, 0) in camera 1's
+    frame. ORB-SLAM3 then rectifies with identity rotations, a resampling of the same pixels.
+    The rewritten file goes into the working directory (settings-pinhole.yaml)."""
+    with open(path) as f:
+        text = f.read()
+    kind = setting(text, "Camera.type")
+    if kind is None:
+        fail(f"{path}: no Camera.type: not an ORB-SLAM3 1.0 settings file (File.version \"1.0\"); "
+             "give the system `settings = \"orbslam3\"`")
+    if kind == "PinHole" and setting(text, "Stereo.T_c1_c2") is None and "Stereo.T_c1_c2" not in text:
+        fail(f"{path}: a PinHole stereo pair needs Stereo.T_c1_c2 (and Camera2.*)")
+    if kind != "Rectified":
+        return path
+    vals = {}
+    for k in ("Camera1.fx", "Camera1.fy", "Camera1.cx", "Camera1.cy", "Stereo.b"):
+        v = setting(text, k)
+        try:
+            vals[k] = float(v)
+        except (TypeError, ValueError):
+            fail(f"{path}: Camera.type Rectified needs a number for {k}, got {v!r}")
+    lines = []
+    for line in text.splitlines():
+        if line.split(":")[0].strip() in ("Camera.type", "Stereo.b"):
+            continue
+        lines.append(line)
+    extra = ['Camera.type: "PinHole"']
+    for cam in ("Camera1", "Camera2"):
+        for k in ("fx", "fy", "cx", "cy"):
+            extra.append(f"{cam}.{k}: {vals['Camera1.' + k]!r}")
+        for k in ("k1", "k2", "p1", "p2"):
+            extra.append(f"{cam}.{k}: 0.0")
+    b = vals["Stereo.b"]
+    extra += ["Stereo.T_c1_c2: !!opencv-matrix", "  rows: 4", "  cols: 4", "  dt: f",
+              f"  data: [1.0, 0.0, 0.0, {b!r}, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, "
+              "0.0, 0.0, 0.0, 1.0]"]
+    # Camera1.* of the original are replaced by the block above.
+    lines = [l for l in lines if not l.split(":")[0].strip().startswith("Camera1.")]
+    head = 0
+    while head < len(lines) and (lines[head].startswith("%") or lines[head].startswith("#")
+                                 or not lines[head].strip() or lines[head].startswith("File.")):
+        head += 1
+    out = lines[:head] + extra + lines[head:]
+    new = os.path.abspath("settings-pinhole.yaml")
+    with open(new, "w") as f:
+        f.write("\n".join(out) + "\n")
+    print(f"{path}: a Rectified pair (which crashes ORB-SLAM3 1.0's settings printer) handed "
+          f"over as PinHole with identity rectification: {new}", flush=True)
+    return new
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("mode", choices=["rgbd", "stereo"])
@@ -103,9 +166,14 @@ def main():
     frames = rgbd_frames(a.sequence, a.frames) if a.mode == "rgbd" else stereo_frames(a.sequence, a.frames)
     if not frames:
         fail(f"{a.frames}: no frames")
+    for p in (f for fr in frames[:1] for f in fr[1:]):
+        if not os.path.isfile(p):
+            fail(f"{p}: no such image (the first frame of {a.frames}; is {a.sequence} the "
+                 f"{'TUM folder' if a.mode == 'rgbd' else 'folder holding mav0'}?)")
+    settings = stereo_settings(a.settings) if a.mode == "stereo" else a.settings
     sensor = pos.Sensor.RGBD if a.mode == "rgbd" else pos.Sensor.STEREO
     t0 = time.time()
-    slam = pos.Slam(a.vocabulary, a.settings, sensor, use_viewer=False)
+    slam = pos.Slam(a.vocabulary, settings, sensor, use_viewer=False)
     print(f"loaded vocabulary {a.vocabulary} and settings in {time.time() - t0:.1f} s", flush=True)
     times, states = [], {}
     start = time.time()

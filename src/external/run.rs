@@ -136,7 +136,17 @@ pub fn run_job(
         std::fs::remove_file(&trajectory)
             .with_context(|| format!("removing the old {}", trajectory.display()))?;
     }
-    let quoted: Vec<String> = argv.iter().map(|a| shell_quote(a)).collect();
+    let env: BTreeMap<String, String> = system
+        .env
+        .iter()
+        .map(|(k, v)| Ok((k.clone(), fill(v, &values)?)))
+        .collect::<Result<_>>()
+        .with_context(|| format!("the env of system {}", system.name))?;
+    let quoted: Vec<String> = env
+        .iter()
+        .map(|(k, v)| format!("{k}={}", shell_quote(v)))
+        .chain(argv.iter().map(|a| shell_quote(a)))
+        .collect();
     ate_eval::io::write_atomic(
         &dir.join("command.txt"),
         format!(
@@ -147,14 +157,7 @@ pub fn run_job(
         .as_bytes(),
     )?;
     let (stdout, stderr) = (dir.join("stdout.log"), dir.join("stderr.log"));
-    let finished = process::run(
-        &argv,
-        &workdir,
-        &system.env,
-        &stdout,
-        &stderr,
-        system.timeout,
-    )?;
+    let finished = process::run(&argv, &workdir, &env, &stdout, &stderr, system.timeout)?;
     trim_log(&stdout);
     trim_log(&stderr);
 

@@ -14,7 +14,16 @@
 //!            "{sequence}", "{associations}"]
 //! trajectory = "CameraTrajectory.txt" # relative to the working directory
 //! format = "tum"
+//! [systems.orbslam2.rgbd.env]         # this sensor's environment, over the system's `env`
+//! OMP_NUM_THREADS = "1"
 //! ```
+//!
+//! Paths are anchored to the TOML's folder, so a definition works from any current directory:
+//! the program, every argument that names a relative path (holds a `/`, no placeholder, does not
+//! start with `-`), `vocabulary` and a relative `workdir`; `{config_dir}` (the TOML's folder,
+//! absolute) may be written anywhere, `env` values included. The trajectory stays relative to
+//! the working directory. The folder's `systems.toml` records the anchored definition and the
+//! vocabulary each system was given (`[vocabularies]`).
 
 use anyhow::{bail, Context, Result};
 use datasets::settings::SettingsFormat;
@@ -25,7 +34,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Every placeholder a command template, working directory or trajectory path may hold.
-pub const PLACEHOLDERS: [(&str, &str); 13] = [
+pub const PLACEHOLDERS: [(&str, &str); 14] = [
     (
         "sequence",
         "the sequence folder (TUM: the folder of rgb.txt; EuRoC: the folder of mav0)",
@@ -57,6 +66,10 @@ pub const PLACEHOLDERS: [(&str, &str); 13] = [
     ("frames", "the number of frames of the run"),
     ("noisefree", "this noisefree executable"),
     ("trajectory", "where the trajectory is expected (absolute)"),
+    (
+        "config_dir",
+        "the folder of the config TOML (absolute; filled when the file is read)",
+    ),
 ];
 
 /// How a trajectory file is written.
@@ -90,6 +103,9 @@ pub struct SensorCommand {
     pub workdir: Option<String>,
     /// Per-run timeout, seconds.
     pub timeout_s: Option<f64>,
+    /// Environment variables for this sensor's runs, over (and besides) the system's `env`.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub env: BTreeMap<String, String>,
 }
 
 /// An external system as the config file declares it.
@@ -202,7 +218,11 @@ impl SystemDef {
             settings,
             vocabulary: self.vocabulary.clone(),
             timeout: Duration::from_secs_f64(timeout_s),
-            env: self.env.clone(),
+            env: {
+                let mut env = self.env.clone();
+                env.extend(cmd.env.clone());
+                env
+            },
         }))
     }
 
@@ -219,6 +239,7 @@ impl SystemDef {
             let mut texts: Vec<&String> = cmd.command.iter().collect();
             texts.extend(cmd.workdir.iter().chain(&self.workdir));
             texts.extend(cmd.trajectory.iter().chain(&self.trajectory));
+            texts.extend(cmd.env.values().chain(self.env.values()));
             for t in texts {
                 for p in placeholders_in(t) {
                     if !PLACEHOLDERS.iter().any(|(k, _)| *k == p) {
@@ -296,8 +317,15 @@ pub fn systems_in_file(path: &Path) -> Result<BTreeMap<String, SystemDef>> {
         )
     })?;
     let dir = path.parent().unwrap_or(Path::new(""));
+    let dir = std::fs::canonicalize(if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    })
+    .unwrap_or_else(|_| dir.to_path_buf());
     let mut out = BTreeMap::new();
     for (name, mut def) in defs {
+        def.fill_config_dir(&dir);
         if crate::sweep::plan::ConfigKind::parse(&name).is_ok() {
             bail!(
                 "{}: system {name:?} has the name of one of noisefree's configurations",
@@ -307,17 +335,18 @@ pub fn systems_in_file(path: &Path) -> Result<BTreeMap<String, SystemDef>> {
         def.validate(&name)
             .with_context(|| format!("{}", path.display()))?;
         let anchor = |p: &mut String| {
-            let pb = Path::new(p.as_str());
-            if p.contains('/') && pb.is_relative() && !p.starts_with('{') {
-                *p = dir.join(pb).display().to_string();
+            if is_relative_path(p) {
+                *p = dir.join(p.as_str()).display().to_string();
             }
         };
         for cmd in [def.rgbd.as_mut(), def.stereo.as_mut()]
             .into_iter()
             .flatten()
         {
-            anchor(&mut cmd.command[0]);
+            cmd.command.iter_mut().for_each(anchor);
+            cmd.workdir.iter_mut().for_each(anchor);
         }
+        def.workdir.iter_mut().for_each(anchor);
         if let Some(v) = &def.vocabulary {
             if v.is_relative() {
                 def.vocabulary = Some(dir.join(v));
@@ -326,6 +355,55 @@ pub fn systems_in_file(path: &Path) -> Result<BTreeMap<String, SystemDef>> {
         out.insert(name, def);
     }
     Ok(out)
+}
+
+/// Whether a definition's string names a path relative to the TOML's folder: it holds a `/`
+/// (a bare word such as `rgbd` is an argument, not a file), no placeholder, and is not an
+/// option (`--out=a/b`).
+fn is_relative_path(s: &str) -> bool {
+    s.contains('/') && !s.contains('{') && !s.starts_with('-') && Path::new(s).is_relative()
+}
+
+impl SystemDef {
+    /// Replaces `{config_dir}` with `dir` in every string of the definition.
+    fn fill_config_dir(&mut self, dir: &Path) {
+        let d = dir.display().to_string();
+        let f = |s: &mut String| *s = s.replace("{config_dir}", &d);
+        for cmd in [self.rgbd.as_mut(), self.stereo.as_mut()]
+            .into_iter()
+            .flatten()
+        {
+            cmd.command.iter_mut().for_each(f);
+            cmd.workdir.iter_mut().for_each(f);
+            cmd.trajectory.iter_mut().for_each(f);
+            cmd.env.values_mut().for_each(f);
+        }
+        self.workdir.iter_mut().for_each(f);
+        self.trajectory.iter_mut().for_each(f);
+        self.env.values_mut().for_each(f);
+        if let Some(v) = &self.vocabulary {
+            let text = v.display().to_string();
+            if text.contains("{config_dir}") {
+                self.vocabulary = Some(PathBuf::from(text.replace("{config_dir}", &d)));
+            }
+        }
+    }
+}
+
+/// The vocabulary a system is given, in words: its file (with its size when readable), or
+/// noisefree's built-in one converted to DBoW2 text. Recorded in the folder's systems.toml and
+/// named in the tables' captions.
+pub fn vocabulary_note(def: &SystemDef) -> String {
+    match &def.vocabulary {
+        Some(p) => match std::fs::metadata(p) {
+            Ok(m) => format!("{} ({:.1} MB)", p.display(), m.len() as f64 / 1e6),
+            Err(_) => p.display().to_string(),
+        },
+        None => format!(
+            "noisefree's built-in vocabulary ({}) as DBoW2 text",
+            crate::vocab_file::DEFAULT_NAME
+        ),
+    }
 }
 
 /// The file of a sweep folder that records the definition of every external system its runs
@@ -380,11 +458,20 @@ pub fn pin_systems(
     #[derive(Serialize)]
     struct File<'a> {
         systems: &'a BTreeMap<String, SystemDef>,
+        vocabularies: BTreeMap<&'a str, String>,
     }
+    let vocabularies = all
+        .iter()
+        .map(|(n, d)| (n.as_str(), vocabulary_note(d)))
+        .collect();
     let text = format!(
         "# the external systems whose runs this folder holds (a sweep with another definition \
-         under one of these names is refused here)\n{}",
-        toml::to_string(&File { systems: &all }).context("writing the system definitions")?
+         under one of these names is refused here), and the vocabulary each was given\n{}",
+        toml::to_string(&File {
+            systems: &all,
+            vocabularies,
+        })
+        .context("writing the system definitions")?
     );
     ate_eval::io::write_atomic(&dir.join(SYSTEMS_FILE), text.as_bytes())?;
     Ok(())
@@ -472,5 +559,51 @@ mod tests {
         .unwrap();
         let e = format!("{:#}", systems_in_file(&p).unwrap_err());
         assert!(e.contains("labl"), "{e}");
+    }
+
+    /// Relative paths in arguments and `{config_dir}` resolve against the TOML's folder; bare
+    /// words, options and placeholders stay as written; the sensor's `env` goes over the system's.
+    #[test]
+    fn relative_arguments_config_dir_and_sensor_env() {
+        let dir = std::env::temp_dir().join(format!("nf-systems-rel-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let dir = std::fs::canonicalize(&dir).unwrap();
+        let p = dir.join("c.toml");
+        std::fs::write(
+            &p,
+            r#"
+            [systems.s]
+            vocabulary = "voc/v.txt"
+            env = { A = "system", B = "{config_dir}/b", C = "{run_dir}" }
+            [systems.s.rgbd]
+            command = ["venv/bin/python", "tools/s.py", "rgbd", "--out=x/y", "{run_dir}/t", "{config_dir}/z"]
+            env = { A = "sensor" }
+            "#,
+        )
+        .unwrap();
+        let defs = systems_in_file(&p).unwrap();
+        let r = defs["s"].resolve("s", SensorKind::Rgbd).unwrap().unwrap();
+        let d = dir.display().to_string();
+        assert_eq!(
+            r.command,
+            [
+                format!("{d}/venv/bin/python"),
+                format!("{d}/tools/s.py"),
+                "rgbd".into(),
+                "--out=x/y".into(),
+                "{run_dir}/t".into(),
+                format!("{d}/z"),
+            ]
+        );
+        assert_eq!(r.env["A"], "sensor");
+        assert_eq!(r.env["B"], format!("{d}/b"));
+        assert_eq!(
+            r.env["C"], "{run_dir}",
+            "run-time placeholders are filled per run"
+        );
+        assert_eq!(r.vocabulary, Some(dir.join("voc/v.txt")));
+        assert!(vocabulary_note(&defs["s"]).contains("voc/v.txt"));
+        assert!(vocabulary_note(&SystemDef::default()).contains("built-in"));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

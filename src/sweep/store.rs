@@ -405,7 +405,10 @@ fn lock(path: &Path) -> Result<File> {
     match f.try_lock() {
         Ok(()) => {}
         Err(std::fs::TryLockError::WouldBlock) => {
-            let holder = std::fs::read_to_string(&lock_path).unwrap_or_default();
+            let holder = human_holder(
+                &std::fs::read_to_string(&lock_path).unwrap_or_default(),
+                std::time::SystemTime::now(),
+            );
             bail!(
                 "another sweep is writing {} ({}): wait for it to finish, or use another --out \
                  folder (shards of one sweep, --shard K/N, each write their own file and run \
@@ -430,6 +433,64 @@ fn lock(path: &Path) -> Result<File> {
     f.write_all(who.as_bytes())?;
     f.flush()?;
     Ok(f)
+}
+
+/// The lock file's `started N s after the epoch` (as every version writes it) in a person's
+/// time: `started 2026-11-27 10:41:03 UTC, 12 min ago`.
+fn human_holder(holder: &str, now: std::time::SystemTime) -> String {
+    const MARK: &str = " s after the epoch";
+    let holder = holder.trim();
+    let Some(end) = holder.find(MARK) else {
+        return holder.to_string();
+    };
+    let start = holder[..end]
+        .rfind(|c: char| !c.is_ascii_digit())
+        .map_or(0, |i| i + 1);
+    let Ok(secs) = holder[start..end].parse::<u64>() else {
+        return holder.to_string();
+    };
+    let now = now
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    format!(
+        "{}{}, {}{}",
+        &holder[..start],
+        utc_text(secs),
+        ago_text(now.saturating_sub(secs)),
+        &holder[end + MARK.len()..]
+    )
+}
+
+/// `YYYY-MM-DD HH:MM:SS UTC` of a Unix time (the proleptic Gregorian calendar; H. Hinnant's
+/// days-to-civil).
+fn utc_text(secs: u64) -> String {
+    let (days, rem) = ((secs / 86_400) as i64, secs % 86_400);
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02} {:02}:{:02}:{:02} UTC",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+/// How long `secs` is, roughly, in the largest unit that fits: `40 s ago`, `12 min ago`,
+/// `3 h 5 min ago`, `2 days 4 h ago`.
+fn ago_text(secs: u64) -> String {
+    match secs {
+        0..=119 => format!("{secs} s ago"),
+        120..=3599 => format!("{} min ago", secs / 60),
+        3600..=86_399 => format!("{} h {} min ago", secs / 3600, secs % 3600 / 60),
+        _ => format!("{} days {} h ago", secs / 86_400, secs % 86_400 / 3600),
+    }
 }
 
 impl RunStore {
@@ -727,5 +788,22 @@ mod tests {
         std::fs::write(on.join(SETTINGS_FILE), "synth_without = \"blur\"\n").unwrap();
         let e = format!("{:#}", settings_of(&on).unwrap_err());
         assert!(e.contains("synth_without"), "{e}");
+    }
+
+    /// The lock's holder in a person's time (issue 44: "started 1795711463 s after the epoch").
+    #[test]
+    fn the_lock_holder_reads_in_utc_and_how_long_ago() {
+        let at = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_795_711_463 + 750);
+        let t = human_holder(
+            "pid 7, started 1795711463 s after the epoch: noisefree sweep --out x\n",
+            at,
+        );
+        assert_eq!(
+            t,
+            "pid 7, started 2026-11-26 16:44:23 UTC, 12 min ago: noisefree sweep --out x"
+        );
+        assert_eq!(utc_text(0), "1970-01-01 00:00:00 UTC");
+        assert_eq!(utc_text(951_782_400), "2000-02-29 00:00:00 UTC");
+        assert_eq!(human_holder("garbage", at), "garbage");
     }
 }
