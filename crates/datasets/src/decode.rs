@@ -2,24 +2,25 @@
 //! weights, as OpenCV's `cvtColor(RGB2GRAY)` that ORB-SLAM2 uses), 16-bit depth PNGs to metres;
 //! and any PNG or JPEG for `noisefree features`.
 //!
-//! An image's header is checked before its pixels are allocated: a header claiming more pixels
-//! than the file's compressed data can expand to ([`MAX_PIXELS_PER_BYTE`]) is refused, so a
-//! corrupt or hostile 100-byte file cannot make the reader allocate gigabytes.
+//! An image's header is checked before its pixels are allocated: a header claiming more pixel
+//! bytes than the file's compressed data can expand to ([`MAX_DECODED_BYTES_PER_BYTE`]) is
+//! refused, so a corrupt or hostile 100-byte file cannot make the reader allocate gigabytes.
 
 use crate::DatasetError;
-use image::{DynamicImage, ImageFormat, ImageReader};
+use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 use slam_core::{DepthImage, GrayImage};
 use std::io::Cursor;
 use std::path::Path;
 
-/// Most pixels a compressed image can hold per byte of its file: deflate (PNG) expands at most
-/// 1032:1, and a 1-bit PNG holds 8 pixels in a byte of expanded data. (JPEG's baseline needs at
-/// least two bits per 8x8 block, 256 pixels a byte; its progressive mode's runs of empty blocks
-/// are held to the same bound as PNG.)
-pub const MAX_PIXELS_PER_BYTE: u64 = 8 * 1032;
+/// Most bytes of decoded pixels a compressed image can hold per byte of its file: deflate
+/// (PNG) expands at most 1032:1, and a 1-bit PNG's samples are decoded to a byte each, 8 from a
+/// byte of expanded data. (JPEG's baseline needs at least two bits per 8x8 block; its
+/// progressive mode's runs of empty blocks are held to the same bound as PNG.)
+pub const MAX_DECODED_BYTES_PER_BYTE: u64 = 8 * 1032;
 
-/// Pixels any image may claim whatever its size (a small file may be a plain 64x64 image).
-const MIN_PIXEL_ALLOWANCE: u64 = 1 << 16;
+/// Bytes of decoded pixels any image may claim whatever its size (a small file may be a plain
+/// 128x128 RGBA image).
+const MIN_DECODED_ALLOWANCE: u64 = 1 << 16;
 
 /// Decodes `bytes` (the file `path`) as `format`, or as the format its content shows when
 /// `None`, after checking that the header's size is one its data can hold.
@@ -43,18 +44,21 @@ fn decode(
             None => r.with_guessed_format().map_err(|e| fail(e.to_string())),
         }
     };
-    let (w, h) = reader(bytes)?
-        .into_dimensions()
+    let decoder = reader(bytes)?
+        .into_decoder()
         .map_err(|e| fail(e.to_string()))?;
-    let pixels = u64::from(w) * u64::from(h);
-    let allowed = MIN_PIXEL_ALLOWANCE + MAX_PIXELS_PER_BYTE * bytes.len() as u64;
-    if pixels > allowed {
+    let (w, h) = decoder.dimensions();
+    let pixel_bytes = u64::from(decoder.color_type().bytes_per_pixel());
+    let decoded = u64::from(w) * u64::from(h) * pixel_bytes;
+    let allowed = MIN_DECODED_ALLOWANCE + MAX_DECODED_BYTES_PER_BYTE * bytes.len() as u64;
+    if decoded > allowed {
         return Err(fail(format!(
-            "the header says {w}x{h} pixels, more than its {} bytes can hold (at most {allowed} \
-             pixels); the file is corrupt or truncated",
+            "the header says {w}x{h} pixels of {pixel_bytes} bytes, more than its {} bytes can \
+             hold (at most {allowed} bytes of pixels); the file is corrupt or truncated",
             bytes.len()
         )));
     }
+    drop(decoder);
     reader(bytes)?.decode().map_err(|e| fail(e.to_string()))
 }
 
@@ -204,6 +208,27 @@ mod tests {
         assert!(e.contains("liar.png") && e.contains("65535x65535"), "{e}");
         let e = read_image(&p).unwrap_err().to_string();
         assert!(e.contains("more than its"), "{e}");
+    }
+
+    #[test]
+    fn the_header_check_counts_bytes_of_pixels_not_pixels() {
+        // Found by fuzzing (png-depth, 1.96 M inputs): a 5 kB 16-bit RGB PNG whose header
+        // says 2359320 x 16 passed a check of pixels per byte and took 227 MB (6 bytes a pixel).
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("rgb16.png");
+        let img =
+            image::ImageBuffer::<image::Rgb<u16>, _>::from_raw(24, 16, vec![9u16; 24 * 16 * 3])
+                .unwrap();
+        img.save(&p).unwrap();
+        let mut b = std::fs::read(&p).unwrap();
+        // As many pixels as the old check let through (90 % of 8256 a byte), 6 bytes each.
+        let width = (0.9 * (MAX_DECODED_BYTES_PER_BYTE * b.len() as u64) as f64 / 16.0) as u32;
+        b[16..20].copy_from_slice(&width.to_be_bytes());
+        let crc = crc32(&b[12..29]);
+        b[29..33].copy_from_slice(&crc.to_be_bytes());
+        std::fs::write(&p, &b).unwrap();
+        let e = read_depth(&p, 5000.0).unwrap_err().to_string();
+        assert!(e.contains("rgb16.png") && e.contains("of 6 bytes"), "{e}");
     }
 
     fn crc32(b: &[u8]) -> u32 {

@@ -552,11 +552,11 @@ pub fn all() -> Vec<Target> {
     out
 }
 
-/// Bytes an image reader may hold per input byte: a file holds at most
-/// [`datasets::decode::MAX_PIXELS_PER_BYTE`] pixels a byte (deflate's 1032:1 at 8 pixels a
-/// byte), and a pixel is held decoded and converted in at most 4 bytes at once (1-bit and
-/// 8-bit grey to grey; 16-bit depth as u16 and f32).
-pub const IMAGE_ALLOC_FACTOR: f64 = datasets::decode::MAX_PIXELS_PER_BYTE as f64 * 4.0;
+/// Bytes an image reader may hold per input byte: a file decodes to at most
+/// [`datasets::decode::MAX_DECODED_BYTES_PER_BYTE`] bytes of pixels a byte (deflate's 1032:1,
+/// a 1-bit sample to a byte), held at once with its conversion (16-bit depth to f32: 3 times
+/// the decoded bytes; colour to grey: less).
+pub const IMAGE_ALLOC_FACTOR: f64 = datasets::decode::MAX_DECODED_BYTES_PER_BYTE as f64 * 3.0;
 
 /// Where the targets write their inputs (for the report).
 pub fn scratch() -> PathBuf {
