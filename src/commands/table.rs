@@ -218,7 +218,7 @@ fn write_index(
         sequences.join(", ")
     );
     let settings = crate::sweep::store::settings_of(dir)?;
-    let _ = writeln!(md, "Vocabularies: ours {}", settings.vocabulary);
+    let _ = write!(md, "Vocabularies: ours {}", settings.vocabulary);
     for (n, v) in vocabularies {
         if systems.contains(&n.as_str()) {
             let _ = write!(md, "; {} {v}", crate::resilience::system_label(n, labels));
