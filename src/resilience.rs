@@ -224,9 +224,8 @@ fn mm_decimals(m: f64) -> usize {
     }
 }
 
-/// `mean ± std` in millimetres, both with the decimals the mean needs.
-pub fn mm_pair(mean: f64, std: f64) -> String {
-    let d = mm_decimals(mean);
+/// `mean ± std` in millimetres with `d` decimals.
+pub fn mm_pair(mean: f64, std: f64, d: usize) -> String {
     format!("{:.d$} ± {:.d$}", mean * 1000.0, std * 1000.0)
 }
 
@@ -265,13 +264,21 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
         );
         let _ = writeln!(md, "|---|{}---|", "---|".repeat(levels.len()));
         for c in rows {
+            // One number of decimals per row: three significant digits of its smallest mean,
+            // so the levels of one system compare digit for digit (as Table III's rows).
+            let d = mm_decimals(
+                c.levels
+                    .iter()
+                    .filter_map(LevelStats::mean)
+                    .fold(f64::INFINITY, f64::min),
+            );
             let cells: Vec<String> = levels
                 .iter()
                 .map(|lv| match c.levels.iter().find(|l| l.level == *lv) {
                     None => "".into(),
                     Some(l) if l.is_failure() => format!("F ({}/{})", l.failed, l.n),
                     Some(l) => {
-                        let mut t = mm_pair(l.mean().unwrap_or(0.0), l.std().unwrap_or(0.0));
+                        let mut t = mm_pair(l.mean().unwrap_or(0.0), l.std().unwrap_or(0.0), d);
                         if l.failed > 0 {
                             let _ = write!(t, " ({}F)", l.failed);
                         }
@@ -312,11 +319,13 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
         "sequence",
         "system",
         "label",
+        "ours",
         "family",
         "level",
         "unit",
         "n",
         "failed",
+        "failure",
         "mean_m",
         "std_m",
         "median_m",
@@ -333,11 +342,13 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
                 c.sequence.clone(),
                 c.system.clone(),
                 c.label.clone(),
+                ConfigKind::parse(&c.system).is_ok().to_string(),
                 family.to_string(),
                 format!("{}", l.level),
                 unit.to_string(),
                 l.n.to_string(),
                 l.failed.to_string(),
+                l.is_failure().to_string(),
                 opt(l.mean()),
                 opt(l.std()),
                 opt(l.median()),
@@ -415,7 +426,7 @@ mod tests {
         let t = table("depth-axial", axial);
         assert!(
             t.markdown
-                .contains("| ORB-SLAM2 (ours) | 2.00 ± 0.00 | 3.90 ± 0.00 | 12.5 ± 0.0 |  | 2 |"),
+                .contains("| ORB-SLAM2 (ours) | 2.00 ± 0.00 | 3.90 ± 0.00 | 12.50 ± 0.00 |  | 2 |"),
             "{}",
             t.markdown
         );
@@ -425,10 +436,11 @@ mod tests {
         let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
         let orb2 = rows
             .iter()
-            .find(|r| &r[1] == "orb" && &r[4] == "2")
+            .find(|r| &r[1] == "orb" && &r[5] == "2")
             .unwrap();
-        assert_eq!(orb2[8].parse::<f64>().unwrap(), 0.0125);
-        assert_eq!(&orb2[14], "2");
+        assert_eq!(&orb2[3], "true");
+        assert_eq!(orb2[10].parse::<f64>().unwrap(), 0.0125);
+        assert_eq!(&orb2[16], "2");
         // JPEG: lower quality is stronger.
         let mut j = vec![rec("orb", None, 0.0, 0, 0.002, false)];
         for q in [90.0, 30.0, 60.0] {
