@@ -721,11 +721,20 @@ impl Entries<'_> {
         })
     }
 
+    /// An image size (0 where the file gives none). Checked here, before anything is built
+    /// from it: an ORB-SLAM3 raw pair is rectified while the file is read, and a fuzzed
+    /// `Camera.width: 742949672955` asked for an 824 GB rectification map.
     fn size(&self, w: &str, h: &str) -> Result<(u32, u32), DatasetError> {
         let get = |k: &str| -> Result<u32, DatasetError> {
-            Ok(self
-                .uint_opt(k)?
-                .map_or(0, |v| v.min(u32::MAX as u64) as u32))
+            match self.uint_opt(k)? {
+                None => Ok(0),
+                Some(v) if v <= u64::from(MAX_IMAGE_SIDE) => Ok(v as u32),
+                Some(v) => Err(DatasetError::parse(
+                    self.path,
+                    self.map.get(k).map_or(0, |e| e.1),
+                    format!("{k} = {v}: must be <= {MAX_IMAGE_SIDE}"),
+                )),
+            }
         };
         Ok((get(w)?, get(h)?))
     }

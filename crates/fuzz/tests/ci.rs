@@ -167,6 +167,23 @@ fn settings_and_sensor_files_claiming_huge_images_or_matrices_are_refused_unallo
             datasets::settings::read_settings(&p, slam_core::SensorKind::Stereo).map(|_| ())
         });
     }
+    // ORB-SLAM3's raw pair is rectified while the file is read: its size is checked first
+    // (found by fuzzing: this width asked for an 824 GB map).
+    let o3 = settings
+        .mutator
+        .seeds()
+        .iter()
+        .map(|s| String::from_utf8(s.clone()).unwrap())
+        .find(|s| s.contains("Stereo.T_c1_c2") && s.contains("Camera.width: 75"))
+        .unwrap();
+    let p = dir.write(
+        "o3.yaml",
+        o3.replace("Camera.width: 75", "Camera.width: 742949672955")
+            .as_bytes(),
+    );
+    refused_small("orb-slam3 width", 1 << 20, "must be <= 8192", || {
+        datasets::settings::read_settings(&p, slam_core::SensorKind::Stereo).map(|_| ())
+    });
     let sensor = include_str!("../seeds/euroc-cam0-sensor.yaml");
     let p = dir.write(
         "sensor.yaml",

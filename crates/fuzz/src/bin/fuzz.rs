@@ -211,12 +211,14 @@ fn main() -> ExitCode {
         if !r.clean() {
             print!("{}", r.details(400));
         }
-        reports.push(r);
-    }
-    if let Some(p) = &args.tally {
-        if let Err(e) = fuzz::engine::driver::append_tally(p, args.seed, &reports) {
-            eprintln!("{}: {e}", p.display());
+        // Each target's line as soon as it is done: a later target that ends the process (a
+        // hang, an allocation bomb) does not take the earlier ones' records with it.
+        if let Some(p) = &args.tally {
+            if let Err(e) = fuzz::engine::driver::append_tally(p, args.seed, std::slice::from_ref(&r)) {
+                eprintln!("{}: {e}", p.display());
+            }
         }
+        reports.push(r);
     }
     let _ = std::fs::remove_dir_all(fuzz::targets::scratch());
     if reports.iter().all(Report::clean) {
