@@ -460,8 +460,13 @@ pub fn resilience(
             .x_labels(levels.len().max(1))
             .x_label_formatter(&|x| category_label(&names, *x))
             .x_desc(x_desc)
-            .y_desc("ATE RMSE [m], log scale")
-            .y_label_formatter(&|y| metres_label(*y))
+            .y_labels(20)
+            .y_desc("ATE RMSE [mm], log scale")
+            .y_label_formatter(&|y| {
+                let mm = *y * 1000.0;
+                let d = (1.0 - mm.log10().floor()).clamp(0.0, 3.0) as usize;
+                format!("{mm:.d$}")
+            })
             .label_style(("sans-serif", 16))
             .draw()
             .map_err(err)?;

@@ -121,7 +121,7 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
     }
     write_atomic(&dir.join("tables.md"), all.as_bytes())?;
     figures_for(dir, &records, &labels)?;
-    write_index(dir, &records, &labels, &vocabularies, &index)?;
+    write_index(dir, &all_records, &labels, &vocabularies, &index)?;
     Ok(all)
 }
 
@@ -206,9 +206,22 @@ fn write_index(
     });
     systems.dedup();
     let mut md = format!("{INDEX_MARK}\n# {name}\n\n");
+    let points: std::collections::BTreeSet<&str> = records
+        .iter()
+        .filter_map(|r| r.perturbation.as_deref())
+        .collect();
+    let perturbed = if points.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " at {} perturbation points (the unperturbed one and {} levels; `perturbation` in runs.csv)",
+            points.len(),
+            points.len().saturating_sub(1)
+        )
+    };
     let _ = writeln!(
         md,
-        "{} runs of {} on {} (`runs.csv`: one line per run).\n",
+        "{} runs of {} on {}{perturbed} (`runs.csv`: one line per run).\n",
         records.len(),
         systems
             .iter()
