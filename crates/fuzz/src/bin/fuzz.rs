@@ -120,7 +120,7 @@ fn summarize(path: &PathBuf) -> Result<String, String> {
         t[8] = t[8].max(num(11)?);
     }
     let mut out = String::from(
-        "| target | runs | CPU time | inputs | panics | slow | over allocation | nameless errors | peak memory | largest input |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| target | runs | wall time | inputs | panics | slow | over allocation | nameless errors | peak memory | largest input |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for (name, t) in &totals {
         out.push_str(&format!(
@@ -214,7 +214,9 @@ fn main() -> ExitCode {
         // Each target's line as soon as it is done: a later target that ends the process (a
         // hang, an allocation bomb) does not take the earlier ones' records with it.
         if let Some(p) = &args.tally {
-            if let Err(e) = fuzz::engine::driver::append_tally(p, args.seed, std::slice::from_ref(&r)) {
+            if let Err(e) =
+                fuzz::engine::driver::append_tally(p, args.seed, std::slice::from_ref(&r))
+            {
                 eprintln!("{}: {e}", p.display());
             }
         }
