@@ -562,3 +562,10 @@ pub const IMAGE_ALLOC_FACTOR: f64 = datasets::decode::MAX_DECODED_BYTES_PER_BYTE
 pub fn scratch() -> PathBuf {
     scratch_dir("lib")
 }
+
+/// Removes the scratch folders of this process (the inputs' and the seeds').
+pub fn remove_scratch() {
+    for name in ["lib", "seed"] {
+        let _ = std::fs::remove_dir_all(scratch_dir(name));
+    }
+}

@@ -222,7 +222,7 @@ fn main() -> ExitCode {
         }
         reports.push(r);
     }
-    let _ = std::fs::remove_dir_all(fuzz::targets::scratch());
+    fuzz::targets::remove_scratch();
     if reports.iter().all(Report::clean) {
         ExitCode::SUCCESS
     } else {
