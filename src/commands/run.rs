@@ -142,10 +142,11 @@ pub fn run_summary(label: &str, config: &str, seed: u64, o: &RunOutcome) -> serd
     })
 }
 
-fn write_run(dir: &Path, label: &str, config: &str, seed: u64, o: &RunOutcome) -> Result<()> {
+/// Writes a run's trajectory, per-frame CSV and summary (with the perturbation it ran under).
+fn write_run(dir: &Path, summary: &serde_json::Value, o: &RunOutcome) -> Result<()> {
     write_tum(&dir.join("trajectory.txt"), &o.trajectory)?;
     write_atomic(&dir.join("frames.csv"), &frames_csv(o)?)?;
-    let s = serde_json::to_string_pretty(&run_summary(label, config, seed, o))?;
+    let s = serde_json::to_string_pretty(summary)?;
     write_atomic(&dir.join("summary.json"), s.as_bytes())?;
     Ok(())
 }
@@ -312,8 +313,11 @@ pub fn run(args: RunArgs) -> Result<()> {
         } else {
             out.join(format!("seed{seed}"))
         };
-        write_run(&dir, &label, cname, *seed, o)?;
-        summaries.push(run_summary(&label, cname, *seed, o));
+        let mut summary = run_summary(&label, cname, *seed, o);
+        summary["perturbation"] = json!(chain.effective().to_string());
+        summary["perturbation_seed"] = json!(args.perturb_seed);
+        write_run(&dir, &summary, o)?;
+        summaries.push(summary);
         let ate = o
             .ate_rmse()
             .map(|a| format!("{a:.4} m"))
