@@ -310,3 +310,37 @@ fn a_perturbation_sweep_records_every_point_and_external_systems_get_the_perturb
     assert!(!bad.join("runs.csv").exists() || records(&bad).is_empty());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Values that parse but make no sense, given on the command line, are refused with their
+/// range before anything runs (issue 45: the config file's were already).
+#[test]
+fn out_of_range_sweep_flags_are_refused_with_their_range() {
+    let dir = tmpdir("flags-range");
+    let o = dir.join("o");
+    let o = o.to_str().unwrap();
+    for (flag, value, needle) in [
+        ("--tau-mf", "-0.5", "tau_mf = -0.5: must be > 0"),
+        ("--baseline", "0", "baseline = 0: must be"),
+    ] {
+        let arg = format!("{flag}={value}");
+        let out = noisefree(&[
+            "sweep",
+            "--seq",
+            "kinect",
+            "--frames",
+            "10",
+            "--runs",
+            "1",
+            "--configs",
+            "mcor+avc",
+            &arg,
+            "--out",
+            o,
+        ]);
+        assert_clean_failure(&out, needle);
+        assert!(
+            !Path::new(o).join("runs.csv").exists(),
+            "nothing ran for {flag} {value}"
+        );
+    }
+}

@@ -231,6 +231,9 @@ pub fn run(args: RunArgs) -> Result<()> {
             rc: args.rc,
         },
     );
+    config
+        .check()
+        .map_err(|e| anyhow::anyhow!("{e} (from the command line or --config)"))?;
     let vocab_flag = match (&args.vocabulary, &args.config) {
         (Some(v), _) => Some(v.clone()),
         (None, Some(c)) => crate::config_file::vocabulary_in_file(c)?,

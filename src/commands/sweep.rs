@@ -310,6 +310,29 @@ pub fn run(args: SweepArgs) -> Result<()> {
             });
         }
     }
+    // Every configuration the flags make, checked against its valid ranges before anything
+    // runs (a config file's values are checked where it is read).
+    {
+        let mut flags = Config::default();
+        if let Some(n) = args.mapping_lag {
+            flags.mapping_lag = n;
+        }
+        let mut seen: Vec<(ConfigKind, crate::sweep::plan::Params)> = Vec::new();
+        for job in &all_jobs {
+            let Some(kind) = job.config.kind() else {
+                continue;
+            };
+            if seen.contains(&(kind, job.params)) {
+                continue;
+            }
+            seen.push((kind, job.params));
+            job_config(&flags, job).check().map_err(|e| {
+                anyhow::anyhow!(
+                    "{e} (from --tau-mf, --tau-gf, --tau-mg, --baseline or --mapping-lag)"
+                )
+            })?;
+        }
+    }
     // --retry-failed: this sweep's runs that an external program failed (a reason recorded)
     // run again.
     let keys: std::collections::BTreeSet<String> = all_jobs.iter().map(Job::key).collect();
