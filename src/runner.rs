@@ -176,39 +176,29 @@ impl ImageFrames {
         orbs: &[OrbConfig],
         on_frame: impl Fn() + Sync,
     ) -> Result<Vec<Self>, DatasetError> {
-        let per_frame: Vec<Result<Vec<ImageFrame>, DatasetError>> = (0..frames.len())
-            .into_par_iter()
-            .map_init(
-                || -> Vec<OrbExtractor> { orbs.iter().cloned().map(OrbExtractor::new).collect() },
-                |extractors, i| {
-                    let mut input = frames.read(i)?;
-                    input.depth = None;
-                    let out = extractors
-                        .iter_mut()
-                        .map(|extractor| {
-                            let t = Instant::now();
-                            let f = slam_core::frame::Frame::new(0, &input, camera, extractor);
-                            (Arc::new(f), t.elapsed().as_secs_f64() * 1e3)
-                        })
-                        .collect();
-                    on_frame();
-                    Ok(out)
-                },
-            )
-            .collect();
-        let mut out: Vec<ImageFrames> = orbs
+        let per_orb = extract_per_orb(
+            frames.len(),
+            |i| {
+                let mut input = frames.read(i)?;
+                input.depth = None;
+                Ok(input)
+            },
+            orbs,
+            on_frame,
+            |input, extractor| {
+                let t = Instant::now();
+                let f = slam_core::frame::Frame::new(0, input, camera, extractor);
+                (Arc::new(f), t.elapsed().as_secs_f64() * 1e3)
+            },
+        )?;
+        Ok(orbs
             .iter()
-            .map(|orb| ImageFrames {
+            .zip(per_orb)
+            .map(|(orb, frames)| ImageFrames {
                 orb: orb.clone(),
-                frames: Vec::with_capacity(frames.len()),
+                frames,
             })
-            .collect();
-        for f in per_frame {
-            for (seq, x) in out.iter_mut().zip(f?) {
-                seq.frames.push(x);
-            }
-        }
-        Ok(out)
+            .collect())
     }
 
     /// The features of a perturbed copy of the sequence whose images are these frames'
@@ -277,39 +267,55 @@ fn extract_each(
     orbs: &[OrbConfig],
     on_frame: impl Fn() + Sync,
 ) -> Result<Vec<ExtractedSequence>, DatasetError> {
-    let per_frame: Vec<Result<Vec<ExtractedFrame>, DatasetError>> = (0..n)
+    let per_orb = extract_per_orb(n, read, orbs, on_frame, |input, extractor| {
+        let t = Instant::now();
+        let features = Arc::new(extract_features(input, camera, extractor));
+        ExtractedFrame {
+            timestamp: input.timestamp,
+            features,
+            extraction_ms: t.elapsed().as_secs_f64() * 1e3,
+        }
+    })?;
+    Ok(orbs
+        .iter()
+        .zip(per_orb)
+        .map(|(orb, frames)| ExtractedSequence {
+            orb: orb.clone(),
+            frames,
+        })
+        .collect())
+}
+
+/// The skeleton both extractions share: frame `i` of `n` read by `read` and handed to
+/// `extract` once per ORB setting of `orbs` (one extractor per setting and worker), in
+/// parallel over frames, each frame's images dropped as soon as it is done; the results per
+/// ORB setting, in frame order. The first unreadable frame (in frame order) is the error.
+fn extract_per_orb<T: Send>(
+    n: usize,
+    read: impl Fn(usize) -> Result<FrameInput, DatasetError> + Sync,
+    orbs: &[OrbConfig],
+    on_frame: impl Fn() + Sync,
+    extract: impl Fn(&FrameInput, &mut OrbExtractor) -> T + Sync,
+) -> Result<Vec<Vec<T>>, DatasetError> {
+    let per_frame: Vec<Result<Vec<T>, DatasetError>> = (0..n)
         .into_par_iter()
         .map_init(
             || -> Vec<OrbExtractor> { orbs.iter().cloned().map(OrbExtractor::new).collect() },
             |extractors, i| {
                 let input = read(i)?;
-                let frames = extractors
+                let out = extractors
                     .iter_mut()
-                    .map(|extractor| {
-                        let t = Instant::now();
-                        let features = Arc::new(extract_features(&input, camera, extractor));
-                        ExtractedFrame {
-                            timestamp: input.timestamp,
-                            features,
-                            extraction_ms: t.elapsed().as_secs_f64() * 1e3,
-                        }
-                    })
+                    .map(|extractor| extract(&input, extractor))
                     .collect();
                 on_frame();
-                Ok(frames)
+                Ok(out)
             },
         )
         .collect();
-    let mut out: Vec<ExtractedSequence> = orbs
-        .iter()
-        .map(|orb| ExtractedSequence {
-            orb: orb.clone(),
-            frames: Vec::with_capacity(n),
-        })
-        .collect();
+    let mut out: Vec<Vec<T>> = orbs.iter().map(|_| Vec::with_capacity(n)).collect();
     for frame in per_frame {
-        for (seq, f) in out.iter_mut().zip(frame?) {
-            seq.frames.push(f);
+        for (seq, x) in out.iter_mut().zip(frame?) {
+            seq.push(x);
         }
     }
     Ok(out)

@@ -936,17 +936,6 @@ fn perturbed_folder(
     seed: u64,
     multi: &MultiProgress,
 ) -> Result<PathBuf> {
-    let safe = |s: &str| -> String {
-        s.chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || "-.".contains(c) {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect()
-    };
     let realization = match src {
         Source::Catalog(name) if catalog.get(name).is_ok_and(|e| e.preset.is_some()) => {
             format!("-seed{}", opts.synth_seed)
@@ -955,9 +944,9 @@ fn perturbed_folder(
     };
     let folder = cache.join("sequences").join(format!(
         "{}{realization}-{}f-{}-ps{seed}",
-        safe(&src.label()),
+        crate::external::export::safe(&src.label()),
         frames.len(),
-        safe(&chain.to_string())
+        crate::external::export::safe(&chain.to_string())
     ));
     if !folder.is_dir() {
         let source_dir = crate::external::export::source_folder(src, catalog, opts)?;

@@ -51,8 +51,8 @@ impl OnDisk {
     }
 }
 
-/// A file-name-safe version of `s`.
-fn safe(s: &str) -> String {
+/// A file-name-safe version of `s` (cache keys, run folders).
+pub fn safe(s: &str) -> String {
     s.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || "-_.".contains(c) {

@@ -221,17 +221,7 @@ impl Job {
         match &self.perturbation {
             None => self.sequence.clone(),
             Some(p) => {
-                let safe: String = p
-                    .chain
-                    .chars()
-                    .map(|c| {
-                        if c.is_ascii_alphanumeric() || "-.".contains(c) {
-                            c
-                        } else {
-                            '_'
-                        }
-                    })
-                    .collect();
+                let safe = crate::external::export::safe(&p.chain);
                 format!("{}/{safe}-ps{}", self.sequence, p.seed)
             }
         }
