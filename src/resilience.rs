@@ -212,18 +212,6 @@ pub fn curves(
     out
 }
 
-/// Decimals of a millimetre figure: three significant digits (two decimals under 10 mm).
-fn mm_decimals(m: f64) -> usize {
-    let v = m * 1000.0;
-    if v >= 100.0 {
-        0
-    } else if v >= 10.0 {
-        1
-    } else {
-        2
-    }
-}
-
 /// `mean ± std` in millimetres with `d` decimals.
 pub fn mm_pair(mean: f64, std: f64, d: usize) -> String {
     format!("{:.d$} ± {:.d$}", mean * 1000.0, std * 1000.0)
@@ -266,11 +254,11 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
         for c in rows {
             // One number of decimals per row: three significant digits of its smallest mean,
             // so the levels of one system compare digit for digit (as Table III's rows).
-            let d = mm_decimals(
+            let d = crate::tables::mm_decimals(
                 c.levels
                     .iter()
-                    .filter_map(LevelStats::mean)
-                    .fold(f64::INFINITY, f64::min),
+                    .filter(|l| !l.is_failure())
+                    .filter_map(LevelStats::mean),
             );
             let cells: Vec<String> = levels
                 .iter()
