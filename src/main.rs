@@ -58,6 +58,9 @@ enum Command {
     /// A sequence's camera as an ORB-SLAM2 / ORB-SLAM3 settings file (YAML), for running
     /// another system on the same files.
     Settings(commands::settings::SettingsArgs),
+    /// Per-frame tracking + mapping cost of each configuration on one sequence, one core, and
+    /// the frames per second of a sweep of the paper's four configurations.
+    Bench(commands::bench::BenchArgs),
     /// Vocabularies of ORB words for place recognition: train, convert (ORBvoc.txt <-> binary), info.
     Vocab(commands::vocab::VocabArgs),
 }
@@ -77,6 +80,7 @@ fn main() -> ExitCode {
         Command::Features(a) => commands::features::run(a),
         Command::Regress(a) => commands::regress::run(a),
         Command::Vocab(a) => commands::vocab::run(a),
+        Command::Bench(a) => commands::bench::run(a),
         Command::Settings(a) => commands::settings::run(a),
     };
     match result {

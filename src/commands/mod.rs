@@ -1,6 +1,7 @@
 //! One module per subcommand: its clap arguments and its `run` function.
 
 pub mod analyze;
+pub mod bench;
 pub mod eval;
 pub mod features;
 pub mod fetch;

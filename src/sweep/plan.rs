@@ -163,7 +163,7 @@ impl RunConfig {
 }
 
 /// Parameters of one run beyond its configuration kind. `None` where the kind does not use it.
-#[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, PartialOrd)]
 pub struct Params {
     /// MC-OR tau_MF, metres.
     pub tau_mf: Option<f64>,

@@ -7,6 +7,7 @@
 //! concurrent local mapping instead: each keyframe's mapping completes a seeded number of frames
 //! later, which gives seeded runs the spread of ORB-SLAM2's threads while staying reproducible.
 
+use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Instant;
@@ -26,7 +27,8 @@ use crate::module::keyframe_decision::{need_new_keyframe, KeyFrameDecisionInput,
 use crate::module::keyframe_insertion::create_keyframe;
 use crate::module::local_mapping::{LocalMapper, MappingContext, MappingParams, MappingReport};
 use crate::module::loop_closing::{LoopCloser, LoopClosingParams, LoopContext, LoopEvent};
-use crate::module::pose_estimation::{mcor_frame_gate, renormalized, NoiseHooks};
+use crate::module::mcor_clusters::FrameClusters;
+use crate::module::pose_estimation::{mcor_frame_gate_with, renormalized, NoiseHooks};
 use crate::module::relocalization::{relocalize, RelocalizationContext, RelocalizationParams};
 use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
 use crate::optimize::{BaConfig, PoseOptConfig};
@@ -245,6 +247,9 @@ pub struct System {
     loop_closer: LoopCloser,
     /// A global BA computed after a loop, merged once frame `.0` has been tracked.
     pending_gba: Option<(u64, GlobalBaResult)>,
+    /// MC-OR's clusters of the frame being tracked, shared by its gates (forgotten when a
+    /// frame starts: mapping moves what they are made of).
+    mcor_clusters: RefCell<FrameClusters>,
 }
 
 /// What local mapping needs of the system (a free function, so that the map and the mapper
@@ -264,6 +269,7 @@ fn mapping_context<'a>(
             mcor: config.mcor.as_ref(),
             avc: config.avc.as_ref(),
             rc: None,
+            clusters: None,
         },
     }
 }
@@ -303,6 +309,7 @@ impl System {
             place: None,
             loop_closer: LoopCloser::default(),
             pending_gba: None,
+            mcor_clusters: RefCell::new(FrameClusters::new()),
         }
     }
 
@@ -531,10 +538,12 @@ impl System {
             .keyframes
             .max_frames
             .unwrap_or(self.camera.fps.round().max(1.0) as u64);
+        self.mcor_clusters.get_mut().invalidate();
         let hooks = NoiseHooks {
             mcor: self.config.mcor.as_ref(),
             avc: self.config.avc.as_ref(),
             rc: self.config.rc.as_ref(),
+            clusters: Some(&self.mcor_clusters),
         };
         let ctx = TrackingContext {
             camera: &self.camera,
@@ -597,7 +606,14 @@ impl System {
             stats.n_tracked_map_points = self.tracker.matches_inliers;
             if let (Some(params), Some(tcw)) = (self.config.mcor.as_ref(), cur.tcw) {
                 // The gate the last optimization round ran, re-run at the final pose.
-                let (_, gate) = mcor_frame_gate(cur, &self.map, &self.camera, params, &tcw);
+                let (_, gate) = mcor_frame_gate_with(
+                    cur,
+                    &self.map,
+                    &self.camera,
+                    params,
+                    &tcw,
+                    &mut self.mcor_clusters.borrow_mut(),
+                );
                 stats.n_mcor_rejected_clusters = gate.n_rejected_clusters;
                 stats.n_mcor_rejected_features = gate.n_rejected_features;
             }
@@ -777,6 +793,7 @@ impl System {
             mcor: self.config.mcor.as_ref(),
             avc: self.config.avc.as_ref(),
             rc: None,
+            clusters: None,
         };
         let result = global_bundle_adjustment(
             &self.map,

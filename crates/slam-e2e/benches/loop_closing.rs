@@ -256,6 +256,7 @@ fn loop_closing(c: &mut Criterion) {
         mcor: None,
         avc: None,
         rc: None,
+        clusters: None,
     };
     g.bench_function("global BA (10 iterations)", |b| {
         b.iter(|| global_bundle_adjustment(&mapped.map, &mapped.camera, &mapped.levels, &hooks, 10))

@@ -82,6 +82,7 @@ fn relocalization(c: &mut Criterion) {
                 mcor: None,
                 avc: None,
                 rc: None,
+                clusters: None,
             },
             place,
         };

@@ -294,6 +294,7 @@ pub fn verify_loop(
         mcor: None,
         avc: None,
         rc: None,
+        clusters: None,
     };
     for &c in candidates {
         let Some(lk) = map.keyframe(c) else {

@@ -2,7 +2,8 @@
 //! optimization of a frame, with the MC-OR / AVC hook points), [`tracking`] (motion model,
 //! reference keyframe, local map), [`keyframe_decision`] and [`keyframe_insertion`] (when and how a
 //! frame becomes a keyframe), [`local_mapping`] (new points, fusion, culling, local BA) and
-//! [`relocalization`], [`loop_closing`] with its [`essential_graph`] and [`global_ba`]. [`noise`]
+//! [`relocalization`], [`loop_closing`] with its [`essential_graph`] and [`global_ba`]. [`mcor_clusters`]
+//! keeps MC-OR's clusters of a frame's matches for all of the frame's gates; [`noise`]
 //! holds the parameters of the paper's two techniques.
 
 pub mod essential_graph;
@@ -11,6 +12,7 @@ pub mod keyframe_decision;
 pub mod keyframe_insertion;
 pub mod local_mapping;
 pub mod loop_closing;
+pub mod mcor_clusters;
 pub mod noise;
 pub mod pose_estimation;
 pub mod relocalization;

@@ -23,17 +23,18 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
+use super::mcor_clusters::FrameClusters;
 use super::noise::{AvcParams, ClusterViews, McorParams};
 use crate::camera::Camera;
 use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
 use crate::optimize::{pose_optimization_with, Measurement, PoseObservation, PoseOptConfig};
+use crate::techniques::mcor_prepared::gate_point;
 use crate::techniques::rigid_consensus::{
     nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
 };
 use crate::techniques::{
-    mcor_gate, ClusterFeature, McorCluster, McorMatch, McorOutcome, McorVerdict,
-    VirtualCameraResidual,
+    ClusterFeature, McorCluster, McorOutcome, McorVerdict, VirtualCameraResidual,
 };
 
 /// `t` with its rotation quaternion renormalised. Products of unit quaternions drift off unit
@@ -56,6 +57,10 @@ pub struct NoiseHooks<'a> {
     pub avc: Option<&'a AvcParams>,
     /// Rigid consensus (beyond the paper) when on: gates pose-only optimization.
     pub rc: Option<&'a RigidConsensusParams>,
+    /// MC-OR's clusters of the frame being tracked, shared by all its gates (the system's;
+    /// `None`: each call builds its own). Only valid while the map does not change: the owner
+    /// invalidates it when a frame starts.
+    pub clusters: Option<&'a RefCell<FrameClusters>>,
 }
 
 /// The measurement of keypoint `i` (hook point 1). Baseline: stereo / RGB-D keypoints with a
@@ -152,30 +157,41 @@ pub fn mcor_frame_gate(
     params: &McorParams,
     tcw: &Isometry3<f64>,
 ) -> (Vec<usize>, McorOutcome) {
+    mcor_frame_gate_with(frame, map, camera, params, tcw, &mut FrameClusters::new())
+}
+
+/// [`mcor_frame_gate`] with the frame's clusters kept in `clusters` (built there on first use,
+/// reused by later gates of the same frame while the map does not change).
+pub fn mcor_frame_gate_with(
+    frame: &TrackedFrame,
+    map: &Map,
+    camera: &Camera,
+    params: &McorParams,
+    tcw: &Isometry3<f64>,
+    clusters: &mut FrameClusters,
+) -> (Vec<usize>, McorOutcome) {
+    clusters.for_frame(frame.id);
+    let twc = tcw.inverse();
     let mut index = Vec::new();
-    let mut clusters = Vec::new();
-    let mut positions = Vec::new();
+    let mut outcome = McorOutcome {
+        verdicts: Vec::new(),
+        n_rejected_clusters: 0,
+        n_rejected_features: 0,
+    };
     for i in 0..frame.len() {
         let Some(id) = frame.map_points[i] else {
             continue;
         };
-        let Some(mp) = map.map_point(id) else {
+        let Some(k) = clusters.cluster(map, id, camera, params.cluster_views) else {
             continue;
         };
         index.push(i);
-        clusters.push(map_point_cluster(map, id, camera, params.cluster_views));
-        positions.push(mp.position);
+        let point_camera = gate_point(frame.features.unproject_camera(i, camera));
+        let verdict = clusters
+            .prepared()
+            .verdict(k, params, &twc, point_camera.as_ref());
+        outcome.push(verdict);
     }
-    let matches: Vec<McorMatch> = index
-        .iter()
-        .enumerate()
-        .map(|(k, &i)| McorMatch {
-            cluster: &clusters[k],
-            map_point: positions[k],
-            point_camera: frame.features.unproject_camera(i, camera),
-        })
-        .collect();
-    let outcome = mcor_gate(params, &tcw.inverse(), &matches);
     (index, outcome)
 }
 
@@ -429,21 +445,35 @@ pub fn optimize_frame_pose(
             })
             .collect()
     });
-    // MC-OR clusters (keyframe poses are fixed during this call) and the current features.
-    let clusters: Vec<McorCluster> = match hooks.mcor {
+    // MC-OR clusters (the map is fixed during this call; the frame's own cache when the system
+    // keeps one, shared with the frame's other gates) and the current features.
+    let mut own_clusters = None;
+    let mut shared_clusters = hooks.clusters.map(|c| c.borrow_mut());
+    let clusters: &mut FrameClusters = match shared_clusters.as_deref_mut() {
+        Some(c) => c,
+        None => own_clusters.get_or_insert_with(FrameClusters::new),
+    };
+    clusters.for_frame(frame.id);
+    let cluster_of: Vec<usize> = match hooks.mcor {
         Some(params) => index
             .iter()
             .map(|&i| {
                 let mp = frame.map_points[i].expect("matched");
-                map_point_cluster(map, mp, camera, params.cluster_views)
+                clusters
+                    .cluster(map, mp, camera, params.cluster_views)
+                    .expect("a matched map point is in the map")
             })
             .collect(),
         None => Vec::new(),
     };
-    let current: Vec<Option<Vector3<f64>>> = index
-        .iter()
-        .map(|&i| frame.features.unproject_camera(i, camera))
-        .collect();
+    let clusters: &FrameClusters = clusters;
+    let gated: Vec<Option<Vector3<f64>>> = match hooks.mcor {
+        Some(_) => index
+            .iter()
+            .map(|&i| gate_point(frame.features.unproject_camera(i, camera)))
+            .collect(),
+        None => Vec::new(),
+    };
     let tapped = tap_active();
     let rc_veto_rounds = hooks.rc.map_or(0, |p| p.veto_rounds);
     // One pose optimization from `start`; `veto` (one per match) keeps matches out of the
@@ -467,23 +497,24 @@ pub fn optimize_frame_pose(
                 }
             }
             if let Some(params) = hooks.mcor {
-                let matches: Vec<McorMatch> = clusters
-                    .iter()
-                    .zip(&obs)
-                    .zip(&current)
-                    .map(|((c, o), p)| McorMatch {
-                        cluster: c,
-                        map_point: o.point_world,
-                        point_camera: *p,
-                    })
-                    .collect();
-                let outcome = mcor_gate(params, &pose.inverse(), &matches);
+                let twc = pose.inverse();
+                let prepared = clusters.prepared();
+                let mut verdicts = Vec::new();
+                last_gate = (0, 0);
                 for (k, e) in excluded.iter_mut().enumerate() {
-                    *e = !outcome.kept(k);
+                    let verdict = prepared.verdict(cluster_of[k], params, &twc, gated[k].as_ref());
+                    match verdict {
+                        McorVerdict::RejectedCluster => last_gate.0 += 1,
+                        McorVerdict::RejectedFeature => last_gate.1 += 1,
+                        McorVerdict::Kept => {}
+                    }
+                    *e = verdict != McorVerdict::Kept;
+                    if tapped {
+                        verdicts.push(verdict);
+                    }
                 }
-                last_gate = (outcome.n_rejected_clusters, outcome.n_rejected_features);
                 if tapped {
-                    last_verdicts = Some(outcome.verdicts);
+                    last_verdicts = Some(verdicts);
                 }
             }
         };
@@ -556,7 +587,7 @@ pub fn optimize_frame_pose(
 mod tests {
     use super::*;
     use crate::feature::KeyPoint;
-    use crate::techniques::{FrameView, McorVerdict};
+    use crate::techniques::{mcor_gate, FrameView, McorMatch, McorVerdict};
     use nalgebra::{Translation3, UnitQuaternion};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -688,6 +719,7 @@ mod tests {
             mcor: Some(&params),
             avc: None,
             rc: None,
+            clusters: None,
         };
         let counts = optimize_from_start(&mut frame, &map, &camera, &hooks);
         assert_eq!(counts.n_matches, 120);
@@ -732,6 +764,72 @@ mod tests {
             ClusterViews::Keyframes,
         );
         assert_eq!(cluster.len(), 3);
+    }
+
+    #[test]
+    fn the_frame_gate_over_cached_clusters_is_the_gate_over_rebuilt_clusters() {
+        // Points 0-29 moved by up to 0.9 m since the keyframes saw them; each has 0-45
+        // frame views (so rings fold).
+        let (camera, mut map, frame, _) =
+            scene_with(|k| if k < 30 { 0.03 * k as f64 } else { 0.0 });
+        let kfs: Vec<_> = map.keyframes().map(|k| k.id).collect();
+        for i in 0..frame.len() {
+            let (Some(id), Some(pc)) = (
+                frame.map_points[i],
+                frame.features.unproject_camera(i, &camera),
+            ) else {
+                continue;
+            };
+            for f in 0..(i * 7 % 46) as u64 {
+                let r = kfs[(i + f as usize) % kfs.len()];
+                let tkw = twc(r.index() % 3).inverse();
+                let tcw = twc(3).inverse();
+                let view = FrameView::new(100 + f, &tcw, r, &tkw, pc * (1.0 + 0.001 * f as f64));
+                map.map_point_mut(id).unwrap().views.push(view.unwrap());
+            }
+        }
+        let mut cache = FrameClusters::new();
+        for views in [ClusterViews::Keyframes, ClusterViews::EveryFrame] {
+            for depth_normalised in [false, true] {
+                for tau in [0.02, 0.1, 0.3, 0.7] {
+                    let params = McorParams {
+                        cluster_views: views,
+                        depth_normalised,
+                        tau_mf: tau,
+                        tau_gf: tau,
+                        tau_mg: tau * 0.7,
+                    };
+                    let tcw = twc(3).inverse();
+                    let (index, outcome) =
+                        mcor_frame_gate_with(&frame, &map, &camera, &params, &tcw, &mut cache);
+                    let clusters: Vec<McorCluster> = index
+                        .iter()
+                        .map(|&i| {
+                            map_point_cluster(&map, frame.map_points[i].unwrap(), &camera, views)
+                        })
+                        .collect();
+                    let matches: Vec<McorMatch> = index
+                        .iter()
+                        .zip(&clusters)
+                        .map(|(&i, c)| McorMatch {
+                            cluster: c,
+                            map_point: map
+                                .map_point(frame.map_points[i].unwrap())
+                                .unwrap()
+                                .position,
+                            point_camera: frame.features.unproject_camera(i, &camera),
+                        })
+                        .collect();
+                    let expected = mcor_gate(&params, &tcw.inverse(), &matches);
+                    assert_eq!(
+                        outcome, expected,
+                        "{views:?} normalised {depth_normalised} tau {tau}"
+                    );
+                    // Both kinds of rejection occur somewhere in the sweep of thresholds.
+                    assert!(outcome.n_kept() > 0);
+                }
+            }
+        }
     }
 
     #[test]
@@ -792,6 +890,7 @@ mod tests {
                 mcor: None,
                 avc: None,
                 rc,
+                clusters: None,
             };
             let counts = optimize_from_start(&mut frame, &map, &camera, &hooks);
             (frame, counts)
@@ -915,6 +1014,7 @@ mod tests {
             mcor: None,
             avc: Some(&avc),
             rc: None,
+            clusters: None,
         };
         let estimate = (start_pose() * Point3::from(points[0])).coords;
         let m = measurement_for(&camera, &frame.features, 0, &hooks, &estimate);
@@ -942,6 +1042,7 @@ mod tests {
             mcor: Some(&params),
             avc: None,
             rc: None,
+            clusters: None,
         };
         let levels = ScaleLevels::new(8, 1.2);
         let cfg = PoseOptConfig::default();

@@ -57,6 +57,12 @@ pub trait CameraResidual: Send + Sync + fmt::Debug {
     /// The residual and `d r / d p_c` at the camera-frame point `p_c`, or `None` when the
     /// residual is undefined there (the observation then counts as an outlier).
     fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock>;
+    /// The residual alone at `p_c` (what chi2 tests and cost evaluations need): must be the
+    /// bits of [`evaluate`](CameraResidual::evaluate)'s `residual`. The default evaluates the
+    /// whole block; a residual whose Jacobian costs more than its value overrides it.
+    fn residual(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<Vector4<f64>> {
+        self.evaluate(camera, p_c).map(|b| b.residual)
+    }
 }
 
 /// What one keypoint measured of a map point.
@@ -186,7 +192,7 @@ pub(crate) fn observation_chi2(
     let r = match measurement {
         Measurement::Mono { u, v } => builtin_residual(camera, *u, *v, None, p_c).0,
         Measurement::Stereo { u, v, ur } => builtin_residual(camera, *u, *v, Some(*ur), p_c).0,
-        Measurement::Custom(_) => measurement.evaluate(camera, p_c)?.residual.into(),
+        Measurement::Custom(c) => c.residual(camera, p_c)?.into(),
     };
     Some(inv_sigma2 * Vector4::from(r).norm_squared())
 }

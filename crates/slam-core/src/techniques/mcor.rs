@@ -413,6 +413,16 @@ impl McorOutcome {
         self.verdicts[i] == McorVerdict::Kept
     }
 
+    /// Appends the verdict of the next match and counts it.
+    pub fn push(&mut self, verdict: McorVerdict) {
+        match verdict {
+            McorVerdict::RejectedCluster => self.n_rejected_clusters += 1,
+            McorVerdict::RejectedFeature => self.n_rejected_features += 1,
+            McorVerdict::Kept => {}
+        }
+        self.verdicts.push(verdict);
+    }
+
     /// Number of kept matches.
     pub fn n_kept(&self) -> usize {
         self.verdicts.len() - self.n_rejected_clusters - self.n_rejected_features
@@ -446,12 +456,7 @@ pub fn mcor_gate(params: &McorParams, twc: &Isometry3<f64>, matches: &[McorMatch
                 }
                 Some(_) => McorVerdict::Kept,
             };
-        match verdict {
-            McorVerdict::RejectedCluster => outcome.n_rejected_clusters += 1,
-            McorVerdict::RejectedFeature => outcome.n_rejected_features += 1,
-            McorVerdict::Kept => {}
-        }
-        outcome.verdicts.push(verdict);
+        outcome.push(verdict);
     }
     outcome
 }

@@ -63,8 +63,14 @@ impl FrameView {
     /// The view as a cluster feature, placed through its reference keyframe's pose `tkw`
     /// (world to camera) when known, else where it was stored.
     pub fn feature(&self, tkw: Option<&Isometry3<f64>>) -> ClusterFeature {
-        let world = match tkw {
-            Some(t) => (t.inverse() * Point3::from(self.point_reference)).coords,
+        self.feature_placed_by(tkw.map(|t| t.inverse()).as_ref())
+    }
+
+    /// As [`feature`](Self::feature), given the inverse `twk` (keyframe to world) of the
+    /// reference keyframe's pose: for callers placing many views with one keyframe.
+    pub fn feature_placed_by(&self, twk: Option<&Isometry3<f64>>) -> ClusterFeature {
+        let world = match twk {
+            Some(t) => (t * Point3::from(self.point_reference)).coords,
             None => self.point_world,
         };
         ClusterFeature::placed(FRAME_VIEW_SOURCE_BIT | self.frame, self.point_camera, world)
@@ -112,6 +118,11 @@ impl FrameViews {
     /// Views held individually, oldest first.
     pub fn views(&self) -> impl ExactSizeIterator<Item = &FrameView> + '_ {
         self.recent.iter()
+    }
+
+    /// The world positions of the views folded out of the ring, summed, and their number.
+    pub fn folded(&self) -> (Vector3<f64>, u64) {
+        (self.folded_sum, self.folded_count)
     }
 
     /// Every view ever stored, folded ones included.

@@ -3,6 +3,8 @@
 //! - [`mcor`]: Map-point Consensus based Outlier Rejection (III-A, Algorithm 1) — per-map-point
 //!   clusters of back-projected observations, FL / CL metrics and the hierarchical gate run
 //!   before every pose-optimization round;
+//! - [`mcor_prepared`]: the same gate over clusters summed once per frame (what the system
+//!   runs; exact);
 //! - [`mcor_views`]: the every-frame reading of MC-OR's cluster (frame views stored on map
 //!   points);
 //! - [`avc`]: the Adaptive Virtual Camera residual (III-B, Eq. 8-12), a 4-D
@@ -17,6 +19,7 @@
 pub mod avc;
 pub mod correlation;
 pub mod mcor;
+pub mod mcor_prepared;
 pub mod mcor_views;
 pub mod rigid_consensus;
 #[cfg(test)]

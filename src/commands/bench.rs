@@ -1,0 +1,307 @@
+//! `noisefree bench`: what tracking and mapping cost per frame for each configuration (orb,
+//! mcor, avc, mcor+avc, rc) on one sequence, on one core, and what a sweep of the paper's four
+//! configurations over a few seeds runs at, reading and feature extraction included.
+//!
+//! Features are extracted once, as a sweep does, so the per-configuration figures are the cost
+//! of tracking + local mapping + loop closing alone: the part the paper's techniques change.
+//! Each configuration runs `--repeat` times and keeps its fastest run (the machine may be
+//! shared); the trajectory hash of each run is printed, so a change meant to be exact can be
+//! checked for bit-identical results on the same command.
+
+use crate::commands::sweep::job_config;
+use crate::config_file::{base_config, overlay_file};
+use crate::regress::cases::trajectory_hash;
+use crate::runner::{run_extracted, ExtractedSequence};
+use crate::select::{open, LoadOptions, Source};
+use crate::sweep::plan::{ConfigKind, Job, Params, RunConfig};
+use anyhow::{bail, Context, Result};
+use ate_eval::io::write_atomic;
+use serde::Serialize;
+use slam_core::system::FrameStats;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `noisefree bench`.
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// Catalogued sequence (a synthetic preset or a downloaded one) [default: `kinect`].
+    #[arg(long, value_name = "NAME", conflicts_with = "path")]
+    pub seq: Option<String>,
+    /// Any TUM RGB-D or EuRoC ASL folder (then "reading" is decoding its image files).
+    #[arg(long, value_name = "DIR")]
+    pub path: Option<PathBuf>,
+    /// Frames (synthetic: generated; real: the first N).
+    #[arg(long, default_value_t = 300, value_name = "N")]
+    pub frames: usize,
+    /// Configurations timed one by one, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "orb,mcor,avc,mcor+avc,rc",
+        value_name = "LIST"
+    )]
+    pub configs: Vec<String>,
+    /// Runs of each configuration; the fastest counts.
+    #[arg(long, default_value_t = 2, value_name = "N")]
+    pub repeat: usize,
+    /// Seeds of the sweep figure (the paper's four configurations x seeds 0..N on one core);
+    /// 0 leaves the sweep figure out.
+    #[arg(long = "sweep-seeds", default_value_t = 3, value_name = "N")]
+    pub sweep_seeds: u64,
+    /// Emulated local-mapping lag (`run --mapping-lag`).
+    #[arg(long = "mapping-lag", value_name = "N")]
+    pub mapping_lag: Option<u32>,
+    /// TOML configuration overlaid on the sensor's defaults.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Place-recognition vocabulary, or `none` [default: the built-in one].
+    #[arg(long, value_name = "FILE|none")]
+    pub vocabulary: Option<PathBuf>,
+    /// Seed of a synthetic sequence's scene and noise.
+    #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
+    pub synth_seed: u64,
+    /// Data root for catalogued real sequences [default: $NOISEFREE_DATA, else ./data].
+    #[arg(long = "data-dir", value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// Also write the figures as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Only track: one run of the first configuration, nothing else timed (for a profiler,
+    /// e.g. `valgrind --tool=callgrind --toggle-collect='*run_extracted*'`).
+    #[arg(long)]
+    pub profile: bool,
+}
+
+/// One configuration's figures.
+#[derive(Debug, Serialize)]
+struct ConfigFigures {
+    config: String,
+    /// Frames per second of tracking + mapping (fastest run).
+    fps: f64,
+    /// Milliseconds a frame (fastest run), and its split from the per-frame statistics.
+    ms_per_frame: f64,
+    tracking_ms: f64,
+    mapping_ms: f64,
+    ba_ms: f64,
+    loop_ms: f64,
+    /// Every run's wall time, seconds.
+    runs_s: Vec<f64>,
+    /// The trajectory's FNV-1a hash (the same in every run, or the bench fails).
+    hash: String,
+    keyframes: usize,
+    map_points: usize,
+    ate_m: Option<f64>,
+}
+
+/// The whole report.
+#[derive(Debug, Serialize)]
+struct Report {
+    sequence: String,
+    frames: usize,
+    reading_s: f64,
+    extraction_s: f64,
+    configs: Vec<ConfigFigures>,
+    sweep_runs: usize,
+    sweep_tracking_s: f64,
+    /// Frames tracked per second of one core over the sweep, reading and extraction included.
+    sweep_fps: Option<f64>,
+}
+
+fn mean(stats: &[FrameStats], f: fn(&FrameStats) -> f64) -> f64 {
+    stats.iter().map(f).sum::<f64>() / stats.len().max(1) as f64
+}
+
+/// Runs `noisefree bench`.
+pub fn run(args: BenchArgs) -> Result<()> {
+    if args.frames == 0 || args.repeat == 0 {
+        bail!("--frames and --repeat must be at least 1");
+    }
+    let kinds = args
+        .configs
+        .iter()
+        .map(|c| ConfigKind::parse(c))
+        .collect::<Result<Vec<_>>>()
+        .context("--configs")?;
+    if kinds.is_empty() {
+        bail!("--configs: no configuration given");
+    }
+    let catalog = datasets::Catalog::embedded();
+    let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
+    let label = source.label();
+    let opts = LoadOptions {
+        data_dir: datasets::data_root(args.data_dir.as_deref()),
+        frames: Some(args.frames),
+        synth_seed: args.synth_seed,
+        synth_without: Vec::new(),
+        camera: None,
+    };
+    let (seq, reader) = open(&source, &catalog, &opts)?;
+    let mut base = base_config(seq.camera.sensor);
+    if let Some(p) = &args.config {
+        base = overlay_file(&base, p)?;
+    }
+    if let Some(lag) = args.mapping_lag {
+        base.mapping_lag = lag;
+    }
+    base.check()
+        .map_err(|e| anyhow::anyhow!("{e} (from the command line or --config)"))?;
+    let vocabulary = crate::vocab_file::choose(args.vocabulary.as_deref())?;
+    let vocabulary = vocabulary.vocabulary.as_ref();
+
+    // One core for everything: reading and extraction too.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .context("starting the worker pool")?;
+    // Reading (decoding or rendering) and extraction, frame by frame, as a sweep does it once
+    // per sequence; the extractor times itself, the rest is reading.
+    let t = Instant::now();
+    let extracted = pool
+        .install(|| {
+            ExtractedSequence::extract_all(&reader, &seq.camera, &[base.orb.clone()], || {})
+        })
+        .with_context(|| format!("reading {label}"))?
+        .remove(0);
+    let extraction_s = extracted.extraction_s();
+    let reading_s = (t.elapsed().as_secs_f64() - extraction_s).max(0.0);
+    let n = extracted.frames.len();
+
+    let job = |kind: ConfigKind, seed: u64| Job {
+        sequence: label.clone(),
+        config: RunConfig::Ours(kind),
+        params: Params::default(),
+        seed,
+        synth_seed: None,
+        perturbation: None,
+    };
+    let track = |kind: ConfigKind, seed: u64| {
+        let config = job_config(&base, &job(kind, seed));
+        let t = Instant::now();
+        let o = run_extracted(&seq, &extracted, &config, vocabulary, |_| {});
+        (t.elapsed().as_secs_f64(), o)
+    };
+
+    if args.profile {
+        let (s, o) = track(kinds[0], 0);
+        println!(
+            "{label} [{}]: {n} frames tracked in {s:.3} s ({:.1} frames/s), trajectory {}",
+            kinds[0],
+            n as f64 / s,
+            trajectory_hash(&o.trajectory)
+        );
+        return Ok(());
+    }
+
+    println!(
+        "{label}: {n} frames; reading {:.2} ms/frame, ORB extraction {:.2} ms/frame (one core, once)",
+        reading_s * 1e3 / n as f64,
+        extraction_s * 1e3 / n as f64
+    );
+    println!(
+        "{:<10} {:>9} {:>9} {:>8} {:>9} {:>8} {:>8} {:>8}  {:<16} {:>4} {:>6} {:>9}",
+        "config",
+        "frames/s",
+        "of orb",
+        "ms/frame",
+        "tracking",
+        "mapping",
+        "BA",
+        "loop",
+        "trajectory",
+        "KFs",
+        "points",
+        "ATE mm"
+    );
+    let mut figures = Vec::new();
+    for &kind in &kinds {
+        let mut runs_s = Vec::new();
+        let mut best: Option<(f64, crate::runner::RunOutcome)> = None;
+        let mut hash = None;
+        for _ in 0..args.repeat {
+            let (s, o) = track(kind, 0);
+            let h = trajectory_hash(&o.trajectory);
+            if hash.get_or_insert_with(|| h.clone()) != &h {
+                bail!("{kind}: two runs of the same seed gave different trajectories");
+            }
+            runs_s.push(s);
+            if best.as_ref().is_none_or(|(b, _)| s < *b) {
+                best = Some((s, o));
+            }
+        }
+        let (s, o) = best.expect("at least one run");
+        let f = ConfigFigures {
+            config: kind.name().to_string(),
+            fps: n as f64 / s,
+            ms_per_frame: s * 1e3 / n as f64,
+            tracking_ms: mean(&o.stats, |x| x.time_tracking_ms),
+            mapping_ms: mean(&o.stats, |x| x.time_mapping_ms),
+            ba_ms: mean(&o.stats, |x| x.time_ba_ms),
+            loop_ms: mean(&o.stats, |x| x.time_loop_ms),
+            runs_s,
+            hash: hash.expect("at least one run"),
+            keyframes: o.keyframes,
+            map_points: o.map_points,
+            ate_m: o.ate_rmse(),
+        };
+        let orb_fps = figures
+            .iter()
+            .find(|c: &&ConfigFigures| c.config == "orb")
+            .map(|c| c.fps);
+        println!(
+            "{:<10} {:>9.1} {:>9} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3}  {:<16} {:>4} {:>6} {:>9}",
+            f.config,
+            f.fps,
+            orb_fps.map_or("-".to_string(), |b| format!("{:.0} %", 100.0 * f.fps / b)),
+            f.ms_per_frame,
+            f.tracking_ms,
+            f.mapping_ms,
+            f.ba_ms,
+            f.loop_ms,
+            f.hash,
+            f.keyframes,
+            f.map_points,
+            f.ate_m.map_or("-".to_string(), |a| format!("{:.3}", a * 1e3))
+        );
+        figures.push(f);
+    }
+
+    let mut sweep_tracking_s = 0.0;
+    let mut sweep_runs = 0;
+    if args.sweep_seeds > 0 {
+        for seed in 0..args.sweep_seeds {
+            for kind in ConfigKind::ALL {
+                sweep_tracking_s += track(kind, seed).0;
+                sweep_runs += 1;
+            }
+        }
+    }
+    let sweep_fps = (sweep_runs > 0)
+        .then(|| (sweep_runs * n) as f64 / (reading_s + extraction_s + sweep_tracking_s));
+    if let Some(fps) = sweep_fps {
+        println!(
+            "sweep (orb, mcor, avc, mcor+avc x seeds 0..{}, one core): {sweep_runs} runs, {} frames \
+             in {:.1} s = {fps:.1} frames/s (reading {:.1} s and extraction {:.1} s once, \
+             tracking {:.1} s)",
+            args.sweep_seeds,
+            sweep_runs * n,
+            reading_s + extraction_s + sweep_tracking_s,
+            reading_s,
+            extraction_s,
+            sweep_tracking_s
+        );
+    }
+    if let Some(path) = &args.json {
+        let report = Report {
+            sequence: label,
+            frames: n,
+            reading_s,
+            extraction_s,
+            configs: figures,
+            sweep_runs,
+            sweep_tracking_s,
+            sweep_fps,
+        };
+        write_atomic(path, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    }
+    Ok(())
+}
