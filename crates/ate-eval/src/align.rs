@@ -73,7 +73,19 @@ pub fn umeyama(
     }
     cov *= inv_n;
     var_e *= inv_n;
-    let svd = cov.svd(true, true);
+    // The SVD squares the covariance's entries: beyond 1e150 (positions 1e75 m from their
+    // mean) they overflow and the fit is NaN (found by fuzzing `eval`). Refused, as is an SVD
+    // that does not converge (bounded iterations, where `svd` loops until it does).
+    let spread = cov.amax().max(var_e);
+    if !(cov.iter().all(|x| x.is_finite()) && spread <= 1e150) {
+        return Err(Error::Degenerate(format!(
+            "positions spread over {:.1e} m: too far apart to align",
+            spread.sqrt()
+        )));
+    }
+    let svd = cov
+        .try_svd(true, true, f64::EPSILON * 5.0, 10_000)
+        .ok_or_else(|| Error::Degenerate("the SVD of the covariance did not converge".into()))?;
     let (u, v_t) = (svd.u.expect("u requested"), svd.v_t.expect("v_t requested"));
     let mut s = Matrix3::identity();
     if u.determinant() * v_t.determinant() < 0.0 {
@@ -94,6 +106,14 @@ pub fn umeyama(
     };
     let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
     let t = mu_g - rot * (mu_e * scale);
+    if !(t.iter().all(|x| x.is_finite())
+        && scale.is_finite()
+        && rot.coords.iter().all(|x| x.is_finite()))
+    {
+        return Err(Error::Degenerate(format!(
+            "the fitted alignment is not finite (scale {scale}, translation {t:?})"
+        )));
+    }
     Ok(Alignment {
         rt: Isometry3::from_parts(Translation3::from(t), rot),
         scale,

@@ -73,22 +73,8 @@ pub fn evaluate_rpe(
     };
     let mut trans_errors = Vec::new();
     let mut rot_errors = Vec::new();
-    for a in 0..pairs.len() {
-        let b = match delta {
-            RpeDelta::Frames(n) => {
-                if n == 0 || a + n >= pairs.len() {
-                    break;
-                }
-                a + n
-            }
-            RpeDelta::Seconds(s) => {
-                let target = gt.stamps[pairs[a].0] + s;
-                match (a + 1..pairs.len()).find(|&k| gt.stamps[pairs[k].0] >= target) {
-                    Some(k) => k,
-                    None => break,
-                }
-            }
-        };
+    let stamps: Vec<f64> = pairs.iter().map(|&(i, _)| gt.stamps[i]).collect();
+    for (a, b) in steps(&stamps, delta) {
         let (gi, ei) = pairs[a];
         let (gj, ej) = pairs[b];
         let rel_gt = gt.poses[gi].inverse() * gt.poses[gj];
@@ -96,6 +82,15 @@ pub fn evaluate_rpe(
         let e = rel_gt.inverse() * rel_est;
         trans_errors.push(e.translation.vector.norm());
         rot_errors.push(e.rotation.angle().to_degrees());
+    }
+    if let Some(e) = trans_errors
+        .iter()
+        .chain(&rot_errors)
+        .find(|e| !e.is_finite())
+    {
+        return Err(Error::Degenerate(format!(
+            "a relative error of {e}: positions too large to measure"
+        )));
     }
     if trans_errors.is_empty() {
         return Err(Error::TooFewPairs {
@@ -111,10 +106,122 @@ pub fn evaluate_rpe(
     })
 }
 
+/// The samples `(a, b)` of pair indices over `delta`, for pairs whose ground-truth stamps are
+/// `stamps`: b = a + n over frames; over seconds the first pair at least `s` after pair a,
+/// until there is none. With stamps in time order (as read) and their targets `t + s` in order
+/// too, b only moves forward, so it is searched from where the previous search ended: linear
+/// in the pairs, not quadratic when `s` spans many of them. Stamps out of order are searched
+/// from pair a + 1 each time.
+fn steps(stamps: &[f64], delta: RpeDelta) -> Vec<(usize, usize)> {
+    use std::cmp::Ordering::{Equal, Greater};
+    let n = stamps.len();
+    match delta {
+        RpeDelta::Frames(k) => {
+            if k == 0 {
+                return Vec::new();
+            }
+            (0..n.saturating_sub(k)).map(|a| (a, a + k)).collect()
+        }
+        RpeDelta::Seconds(s) => {
+            let in_order = |x: &[f64]| x.windows(2).all(|w| w[0] <= w[1]);
+            let targets: Vec<f64> = stamps.iter().map(|t| t + s).collect();
+            let forward_only =
+                in_order(stamps) && in_order(&targets) && targets.iter().all(|t| !t.is_nan());
+            let mut out = Vec::new();
+            let mut b = 0;
+            for (a, &target) in targets.iter().enumerate() {
+                b = if forward_only { b.max(a + 1) } else { a + 1 };
+                while b < n && !matches!(stamps[b].partial_cmp(&target), Some(Greater | Equal)) {
+                    b += 1;
+                }
+                if b == n {
+                    break;
+                }
+                out.push((a, b));
+            }
+            out
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::{Translation3, UnitQuaternion};
+
+    /// The samples as found until issue 45: over seconds, a scan from pair a + 1 for every a
+    /// (quadratic when `s` spans many pairs).
+    fn steps_scanning(stamps: &[f64], delta: RpeDelta) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for a in 0..stamps.len() {
+            let b = match delta {
+                RpeDelta::Frames(n) => {
+                    if n == 0 || a + n >= stamps.len() {
+                        break;
+                    }
+                    a + n
+                }
+                RpeDelta::Seconds(s) => {
+                    let target = stamps[a] + s;
+                    match (a + 1..stamps.len()).find(|&k| stamps[k] >= target) {
+                        Some(k) => k,
+                        None => break,
+                    }
+                }
+            };
+            out.push((a, b));
+        }
+        out
+    }
+
+    #[test]
+    fn samples_over_seconds_are_those_of_the_scan() {
+        let mut state = 45u64;
+        let mut unit = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..3000 {
+            let n = (unit() * 80.0) as usize;
+            let mut stamps: Vec<f64> = Vec::new();
+            let mut t = 1_305_031_102.0;
+            for _ in 0..n {
+                // Steps of 0 (repeats) to 0.1 s; now and then one back in time.
+                t += [0.0, 0.001, 0.033, 0.1, -0.05][(unit() * 5.0) as usize];
+                stamps.push(t);
+            }
+            if case % 7 == 0 && n > 0 {
+                stamps[(unit() * n as f64) as usize] =
+                    [f64::NAN, f64::INFINITY, -1e300][(unit() * 3.0) as usize];
+            }
+            let s = [
+                0.0,
+                -0.5,
+                0.05,
+                0.1,
+                1.0,
+                1e9,
+                f64::NAN,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ][case % 9];
+            assert_eq!(
+                steps(&stamps, RpeDelta::Seconds(s)),
+                steps_scanning(&stamps, RpeDelta::Seconds(s)),
+                "{stamps:?} {s}"
+            );
+            for k in [0, 1, 3, n] {
+                assert_eq!(
+                    steps(&stamps, RpeDelta::Frames(k)),
+                    steps_scanning(&stamps, RpeDelta::Frames(k))
+                );
+            }
+        }
+        // A frame count past the end gives no sample (the scan's a + n overflowed).
+        assert!(steps(&[0.0, 1.0], RpeDelta::Frames(usize::MAX)).is_empty());
+    }
 
     #[test]
     fn constant_drift_per_step_is_measured() {

@@ -9,7 +9,7 @@ use crate::engine::driver::{scratch_dir, Target};
 use crate::engine::mutate::Mutator;
 use crate::fixup;
 use ate_eval::io as traj;
-use ate_eval::StampPolicy;
+use ate_eval::{AssociationMode, AteOptions, RpeDelta, StampPolicy};
 use datasets::settings::{self, CameraSettings, SettingsFormat};
 use nalgebra::Isometry3;
 use slam_core::place::vocabulary::{NodeRecord, Vocabulary, Weighting};
@@ -192,6 +192,69 @@ fn check_trajectory(t: &ate_eval::Trajectory) {
     }
 }
 
+/// A TUM trajectory of `n` poses `step` seconds apart: with `n * step` under the 20 ms window
+/// of evaluate_ate.py, every stamp is a candidate partner of every other (a system writing
+/// nanosecond stamps, or at a wrong rate), the worst case of the greedy pairing.
+fn crowded_trajectory(n: usize, step: f64) -> Vec<u8> {
+    (0..n)
+        .map(|k| {
+            let a = k as f64 * 0.01;
+            format!(
+                "{:.6} {:.4} {:.4} {:.4} 0 0 0 1\n",
+                1_305_031_102.0 + k as f64 * step,
+                a.cos(),
+                a.sin(),
+                0.001 * k as f64
+            )
+        })
+        .collect::<String>()
+        .into_bytes()
+}
+
+/// What `noisefree eval` does with a trajectory file, with the file as both ground truth and
+/// estimate: read under each association's stamp policy, paired (at offsets 0 and 13 ms, so
+/// that the greedy pairing has choices to make), scored (ATE, RPE over a frame and over
+/// 50 ms). Errors of the evaluation are given the file as `eval` gives them; an accepted
+/// evaluation must pair each stamp at most once, within the window, with finite errors.
+fn evaluate(p: &Path) -> Result<(), String> {
+    let fail = |err: ate_eval::Error| format!("evaluating {} against itself: {err}", p.display());
+    let mut last = Ok(());
+    for mode in [AssociationMode::Tum, AssociationMode::Evo] {
+        let t = traj::read_tum_loaded(p, StampPolicy::for_association(mode))
+            .map_err(e)?
+            .trajectory;
+        for offset in [0.0, 0.013] {
+            let opts = AteOptions {
+                offset,
+                association: mode,
+                ..AteOptions::default()
+            };
+            match ate_eval::evaluate_ate(&t, &t, &opts) {
+                Ok(ate) => {
+                    let mut used = (vec![false; t.len()], vec![false; t.len()]);
+                    for &(i, j) in &ate.pairs {
+                        let dt = (t.stamps[i] - (t.stamps[j] + offset)).abs();
+                        assert!(dt <= opts.max_difference, "pair {i} {j}: |dt| = {dt}");
+                        if mode == AssociationMode::Tum {
+                            assert!(!used.0[i] && !used.1[j], "a stamp paired twice");
+                            (used.0[i], used.1[j]) = (true, true);
+                        }
+                    }
+                    assert!(ate.errors.iter().all(|x| x.is_finite()), "{:?}", ate.stats);
+                }
+                Err(err) => last = Err(fail(err)),
+            }
+            for delta in [RpeDelta::Frames(1), RpeDelta::Seconds(0.05)] {
+                match ate_eval::evaluate_rpe(&t, &t, delta, &opts) {
+                    Ok(r) => assert!(r.trans_errors.iter().all(|x| x.is_finite())),
+                    Err(err) => last = Err(fail(err)),
+                }
+            }
+        }
+    }
+    last
+}
+
 /// What every settings file a reader accepts must give: the ranges noisefree can run with.
 fn check_settings(s: &CameraSettings) {
     let c = &s.camera;
@@ -354,6 +417,20 @@ pub fn all() -> Vec<Target> {
                     .map(|l| check_trajectory(&l.trajectory))
                     .map_err(e)
             }),
+        ),
+        target(
+            "eval",
+            "`noisefree eval`'s pairing and scoring of a TUM trajectory against itself (ate_eval: evaluate_ate.py's greedy and evo's nearest association, offsets 0 and 13 ms, ATE and RPE)",
+            "trajectory.txt",
+            vec![
+                seed!("tum-groundtruth.txt"),
+                seed!("tum-orbslam2.txt"),
+                seed!("euroc-cam0.tum.txt"),
+                crowded_trajectory(2000, 5e-6),
+                crowded_trajectory(300, 1e-4),
+            ],
+            &traj_words,
+            on_file("trajectory.txt", evaluate),
         ),
         target(
             "euroc-groundtruth",
