@@ -7,7 +7,14 @@
 //!
 //! `cargo test --bin noisefree fuzz_cli` runs the CI pass (a few thousand fixed-seed inputs a
 //! target); `make fuzz` runs the long pass (`fuzz_cli_long`, ignored by default) for
-//! `FUZZ_SECS` seconds a target, appending to the tally `FUZZ_TALLY`.
+//! `FUZZ_SECS` seconds a target, appending to the tally `FUZZ_TALLY`. A saved input (a
+//! finding in `target/fuzz`) is read again by `fuzz_cli_replay`, the `fuzz --replay` of these
+//! targets:
+//!
+//! ```text
+//! FUZZ_TARGET=config-toml FUZZ_REPLAY=target/fuzz/config-toml-slow-1.bin \
+//!   cargo test -p noisefree --bin noisefree fuzz_cli_replay -- --ignored --nocapture
+//! ```
 
 #[path = "../crates/fuzz/src/engine/mod.rs"]
 #[allow(dead_code)]
@@ -253,6 +260,50 @@ fn fuzz_cli_long() {
     }
     let _ = std::fs::remove_dir_all(scratch_dir("cli"));
     check(&reports);
+}
+
+/// `fuzz --replay` for the binary's targets: reads the file `FUZZ_REPLAY` with the target
+/// `FUZZ_TARGET` once, prints the outcome, time and memory, and fails when the input breaks a
+/// rule of the long pass (a panic is the reader's own: run with `RUST_BACKTRACE=1`).
+#[test]
+#[ignore = "replays the input FUZZ_REPLAY with the target FUZZ_TARGET"]
+fn fuzz_cli_replay() {
+    let (Ok(name), Ok(file)) = (std::env::var("FUZZ_TARGET"), std::env::var("FUZZ_REPLAY")) else {
+        panic!("set FUZZ_TARGET (a target name) and FUZZ_REPLAY (the input's file)");
+    };
+    let all = targets();
+    let Some(t) = all.iter().find(|t| t.name == name) else {
+        let names: Vec<_> = all.iter().map(|t| t.name).collect();
+        panic!("no target {name:?}; targets: {}", names.join(", "));
+    };
+    let input = std::fs::read(&file).unwrap_or_else(|e| panic!("{file}: {e}"));
+    let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/fuzz");
+    let r = engine::driver::replay(t, &input, &Limits::long(0.0, out));
+    println!("{}", r.summary());
+    let _ = std::fs::remove_dir_all(scratch_dir("cli"));
+    assert!(r.broken.is_empty(), "{}", r.summary());
+}
+
+#[test]
+fn a_saved_input_is_replayed_with_its_memory_counted() {
+    // What fuzz_cli_replay does, on a config file that sets a value out of its range.
+    let all = targets();
+    let t = all.iter().find(|t| t.name == "config-toml").unwrap();
+    let r = engine::driver::replay(
+        t,
+        b"[orb]\nscale_factor = 0.5\n",
+        &Limits::long(0.0, std::env::temp_dir()),
+    );
+    let e = r.outcome.as_ref().unwrap_err();
+    assert!(
+        e.contains("config.toml") && e.contains("scale_factor = 0.5"),
+        "{e}"
+    );
+    assert!(
+        r.peak_bytes.is_some() && r.broken.is_empty(),
+        "{}",
+        r.summary()
+    );
 }
 
 #[test]

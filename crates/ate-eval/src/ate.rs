@@ -78,8 +78,8 @@ pub fn evaluate_ate(gt: &Trajectory, est: &Trajectory, opts: &AteOptions) -> Res
         .map(|(e, g)| (alignment.apply(e) - g).norm())
         .collect();
     if let Some(e) = errors.iter().find(|e| !e.is_finite()) {
-        return Err(Error::Degenerate(format!(
-            "an error of {e} m: positions too large to measure"
+        return Err(Error::NotFinite(format!(
+            "an error of {e} m (positions too large to measure)"
         )));
     }
     Ok(AteResult {
@@ -237,7 +237,7 @@ mod tests {
             ..Default::default()
         };
         match evaluate_ate(&far, &other, &opts) {
-            Err(Error::Degenerate(m)) => assert!(m.contains("an error of inf m"), "{m}"),
+            Err(Error::NotFinite(m)) => assert!(m.contains("an error of inf m"), "{m}"),
             r => panic!("{r:?}"),
         }
         // Far but alignable: 1e60 m is measured (the SVD's squares stay finite).

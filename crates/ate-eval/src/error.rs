@@ -65,6 +65,17 @@ pub enum Error {
     /// The alignment is undefined (e.g. all positions identical for a Sim3 fit).
     #[error("alignment is degenerate: {0}")]
     Degenerate(String),
+    /// No two associated poses are the relative pose error's step apart.
+    #[error("no relative pose error sample over {step} among the {pairs} associated pose pairs; check --rpe-frames / --rpe-seconds against the trajectories' length")]
+    NoRpeSample {
+        /// Number of associated pairs.
+        pairs: usize,
+        /// The step (`3 frames`, `0.05 s`).
+        step: String,
+    },
+    /// An error came out infinite or NaN (positions near the largest doubles).
+    #[error("the errors are not finite: {0}")]
+    NotFinite(String),
 }
 
 /// Result alias of this crate.

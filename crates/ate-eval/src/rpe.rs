@@ -88,14 +88,20 @@ pub fn evaluate_rpe(
         .chain(&rot_errors)
         .find(|e| !e.is_finite())
     {
-        return Err(Error::Degenerate(format!(
-            "a relative error of {e}: positions too large to measure"
+        return Err(Error::NotFinite(format!(
+            "a relative error of {e} (positions too large to measure)"
         )));
     }
     if trans_errors.is_empty() {
-        return Err(Error::TooFewPairs {
+        // Found replaying a fuzz input: this said "only 2000 pose pairs associated (need at
+        // least 2)" for 2000 pairs spanning less than the step.
+        return Err(Error::NoRpeSample {
             pairs: pairs.len(),
-            needed: 2,
+            step: match delta {
+                RpeDelta::Frames(1) => "1 frame".into(),
+                RpeDelta::Frames(n) => format!("{n} frames"),
+                RpeDelta::Seconds(s) => format!("{s} s"),
+            },
         });
     }
     Ok(RpeResult {
@@ -250,5 +256,26 @@ mod tests {
         let r = evaluate_rpe(&gt, &moved, RpeDelta::Seconds(2.5), &AteOptions::default()).unwrap();
         assert!(r.trans.max < 1e-12 && r.rot.max < 1e-9);
         assert_eq!(r.trans.count, 17);
+    }
+
+    #[test]
+    fn pairs_spanning_less_than_the_step_say_so() {
+        let mut gt = Trajectory::new();
+        for i in 0..20 {
+            gt.push(i as f64 * 0.01, Isometry3::translation(i as f64, 0.0, 0.0));
+        }
+        for (delta, want) in [
+            (
+                RpeDelta::Seconds(0.5),
+                "no relative pose error sample over 0.5 s among the 20",
+            ),
+            (
+                RpeDelta::Frames(20),
+                "over 20 frames among the 20 associated pose pairs",
+            ),
+        ] {
+            let e = evaluate_rpe(&gt, &gt, delta, &AteOptions::default()).unwrap_err();
+            assert!(e.to_string().contains(want), "{e}");
+        }
     }
 }

@@ -34,6 +34,28 @@ fn every_reader_survives_a_fixed_seed_pass() {
     assert!(names.len() >= 15, "{names:?}");
 }
 
+#[test]
+fn a_replay_counts_memory_and_judges_by_the_rules_of_a_run() {
+    let targets = fuzz::targets::all();
+    let t = targets.iter().find(|t| t.name == "tum-list").unwrap();
+    let limits = Limits::long(1.0, std::env::temp_dir());
+    let ok = fuzz::engine::driver::replay(t, b"1.0 rgb/1.png\n", &limits);
+    assert!(
+        ok.outcome.is_ok() && ok.broken.is_empty(),
+        "{}",
+        ok.summary()
+    );
+    assert!(ok.peak_bytes.is_some(), "not counted");
+    let bad = fuzz::engine::driver::replay(t, b"1.0\n", &limits);
+    let e = bad.outcome.as_ref().unwrap_err();
+    assert!(
+        e.contains("rgb.txt") && bad.broken.is_empty(),
+        "{}",
+        bad.summary()
+    );
+    fuzz::targets::remove_scratch();
+}
+
 /// Bytes live at once while `f` runs (beyond those live before).
 fn peak_of<T>(f: impl FnOnce() -> T) -> (T, usize) {
     let base = alloc::reset_peak();

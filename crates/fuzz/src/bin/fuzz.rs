@@ -8,7 +8,9 @@
 //! ```
 //! `--summarize` prints the totals of a tally file per target as a Markdown table (inputs,
 //! rules broken, the largest peak memory and input), the table of results/fuzz/README.md.
-//! `--replay` reads one saved input with the target's reader and prints the outcome and time.
+//! `--replay` reads one saved input with the target's reader and prints the outcome, time and
+//! memory, judged by a long run's rules (exit status 1 when it breaks one; a panic is the
+//! reader's own, with its backtrace under `RUST_BACKTRACE=1`).
 //! `--secs` is per target. Findings (panicking, slow, allocation-bomb inputs) are saved in
 //! `--out` (default `target/fuzz`); the exit status is 1 when any target broke a rule.
 
@@ -190,17 +192,19 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
         };
+        let limits = Limits::long(args.secs, args.out.clone());
+        let mut clean = true;
         for t in &chosen {
-            let t0 = std::time::Instant::now();
-            let outcome = (t.read)(&input);
-            println!(
-                "{}: {:?} in {:.3} ms",
-                t.name,
-                outcome,
-                t0.elapsed().as_secs_f64() * 1e3
-            );
+            let r = fuzz::engine::driver::replay(t, &input, &limits);
+            println!("{}", r.summary());
+            clean &= r.broken.is_empty();
         }
-        return ExitCode::SUCCESS;
+        fuzz::targets::remove_scratch();
+        return if clean {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        };
     }
     let mut limits = Limits::long(args.secs, args.out.clone());
     limits.max_inputs = args.inputs;

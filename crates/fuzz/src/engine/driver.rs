@@ -98,6 +98,125 @@ impl Limits {
     }
 }
 
+impl Limits {
+    /// The time an input of `len` bytes may take.
+    pub fn allowed_time(&self, len: usize) -> Duration {
+        self.time_base + self.time_per_byte * len as u32
+    }
+
+    /// The bytes `target`'s reader may hold for an input of `len` bytes.
+    pub fn allowed_bytes(&self, target: &Target, len: usize) -> f64 {
+        self.alloc_floor as f64 + target.alloc_factor * len as f64
+    }
+}
+
+/// Whether an error of `target`'s reader names the file it read (readers of memory have none).
+fn names_its_file(target: &Target, msg: &str) -> bool {
+    target.file.is_empty() || msg.contains(target.file)
+}
+
+/// The time `input` takes, `took` the first time: an input over `allowed` is timed twice more
+/// and judged by its fastest run (a machine shared with other work deschedules the reader
+/// now and then).
+fn fastest(target: &Target, input: &[u8], took: Duration, allowed: Duration) -> Duration {
+    if took <= allowed {
+        return took;
+    }
+    (0..2)
+        .map(|_| {
+            let t = Instant::now();
+            let _ = catch_unwind(AssertUnwindSafe(|| (target.read)(input)));
+            t.elapsed()
+        })
+        .fold(took, Duration::min)
+}
+
+/// What one input did when read again by [`replay`].
+#[derive(Clone, Debug)]
+pub struct Replay {
+    /// Target name.
+    pub target: String,
+    /// Input size, bytes.
+    pub len: usize,
+    /// The reader's answer.
+    pub outcome: Result<(), String>,
+    /// The time it took (over the bound: its fastest of three runs).
+    pub took: Duration,
+    /// Most bytes live at once beyond those live before, when counted.
+    pub peak_bytes: Option<u64>,
+    /// The rules it broke, as a run judges them (empty: none).
+    pub broken: Vec<String>,
+}
+
+impl Replay {
+    /// The outcome, time, memory and verdict, on a few lines.
+    pub fn summary(&self) -> String {
+        let peak = self.peak_bytes.map_or("not counted".into(), |b| {
+            format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64)
+        });
+        let verdict = if self.broken.is_empty() {
+            "keeps every rule".to_string()
+        } else {
+            format!("BREAKS: {}", self.broken.join("; "))
+        };
+        format!(
+            "{}: {} bytes read in {:.3} ms, peak {peak}\n  {:?}\n  {verdict}",
+            self.target,
+            self.len,
+            self.took.as_secs_f64() * 1e3,
+            self.outcome
+        )
+    }
+}
+
+/// Reads one saved input (a finding of a run, a hand-made file) with `target`'s reader as a
+/// run reads it, and judges it by `limits`: time, memory, an error without the file's name. A
+/// panic is not caught: it surfaces as the reader's own, with its backtrace under
+/// `RUST_BACKTRACE=1`; a single allocation over the hard limit aborts, as in a run.
+pub fn replay(target: &Target, input: &[u8], limits: &Limits) -> Replay {
+    let _one_at_a_time = lock(&RUN_LOCK);
+    alloc::Counting::install_check();
+    let counted = alloc::installed();
+    if counted {
+        alloc::set_limit(limits.alloc_hard_limit, on_alloc_limit);
+    }
+    let base = alloc::reset_peak();
+    let t = Instant::now();
+    let outcome = (target.read)(input);
+    let took = t.elapsed();
+    let peak = (alloc::peak() - base).max(0) as u64;
+    if counted {
+        alloc::set_limit(usize::MAX, on_alloc_limit);
+    }
+    let allowed = limits.allowed_time(input.len());
+    let took = fastest(target, input, took, allowed);
+    let mut broken = Vec::new();
+    if took > allowed {
+        broken.push(format!(
+            "slow: {:.1} ms, allowed {:.1} ms",
+            took.as_secs_f64() * 1e3,
+            allowed.as_secs_f64() * 1e3
+        ));
+    }
+    let bound = limits.allowed_bytes(target, input.len());
+    if counted && peak as f64 > bound {
+        broken.push(format!("{peak} bytes live, allowed {bound:.0}"));
+    }
+    if let Err(msg) = &outcome {
+        if !names_its_file(target, msg) {
+            broken.push(format!("the error does not name {}", target.file));
+        }
+    }
+    Replay {
+        target: target.name.to_string(),
+        len: input.len(),
+        outcome,
+        took,
+        peak_bytes: counted.then_some(peak),
+        broken,
+    }
+}
+
 /// One input that broke a rule, shrunk where the rule is a panic.
 #[derive(Clone, Debug)]
 pub struct Finding {
@@ -227,7 +346,7 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 fn save_current(kind: &str) -> String {
     let cur = lock(&CURRENT);
     let Some(c) = cur.as_ref() else {
-        return "no input".into();
+        return "not saved (a replay: the file given)".into();
     };
     match &c.out_dir {
         Some(dir) => {
@@ -377,7 +496,7 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
             Ok(Ok(())) => report.accepted += 1,
             Ok(Err(msg)) => {
                 report.refused += 1;
-                if !target.file.is_empty() && !msg.contains(target.file) {
+                if !names_its_file(target, &msg) {
                     report.n_nameless += 1;
                     if report.nameless.len() < KEEP {
                         report.nameless.push(Finding {
@@ -406,20 +525,8 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
                 }
             }
         }
-        let allowed = limits.time_base + limits.time_per_byte * input.len() as u32;
-        // A machine shared with other work deschedules the reader now and then: an input over
-        // the bound is timed twice more, and judged by its fastest run.
-        let took = if took > allowed {
-            (0..2)
-                .map(|_| {
-                    let t = Instant::now();
-                    let _ = catch_unwind(AssertUnwindSafe(|| (target.read)(&input)));
-                    t.elapsed()
-                })
-                .fold(took, Duration::min)
-        } else {
-            took
-        };
+        let allowed = limits.allowed_time(input.len());
+        let took = fastest(target, &input, took, allowed);
         report.slowest = report.slowest.max(took);
         if took > allowed {
             report.n_slow += 1;
@@ -436,7 +543,7 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
                 });
             }
         }
-        let bound = limits.alloc_floor as f64 + target.alloc_factor * input.len() as f64;
+        let bound = limits.allowed_bytes(target, input.len());
         if counted && peak as f64 > bound {
             report.n_alloc += 1;
             save(
@@ -553,6 +660,37 @@ mod tests {
         assert_eq!(r.panics[0].input, b"9");
         assert_eq!(r.n_nameless, 0);
         assert!(!r.clean());
+    }
+
+    #[test]
+    fn a_replay_judges_one_input_by_the_rules_of_a_run() {
+        let t = target(Box::new(|b: &[u8]| {
+            if b.starts_with(b"big") {
+                let v = vec![1u8; 64 << 20];
+                return Err(format!("f.txt: {}", v.len()));
+            }
+            if b.is_empty() {
+                return Err("no name".into());
+            }
+            Ok(())
+        }));
+        let limits = Limits::ci(1);
+        let ok = replay(&t, b"12 34\n", &limits);
+        assert_eq!(ok.outcome, Ok(()));
+        assert!(ok.broken.is_empty(), "{}", ok.summary());
+        let nameless = replay(&t, b"", &limits);
+        assert_eq!(nameless.broken.len(), 1, "{}", nameless.summary());
+        assert!(nameless.summary().contains("does not name f.txt"));
+        // The counting allocator is installed in the fuzz binary and the CI tests, not in
+        // this crate's unit tests: memory is judged only where counted.
+        let big = replay(&t, b"big", &limits);
+        assert!(big.outcome.is_err());
+        assert_eq!(
+            big.broken.is_empty(),
+            big.peak_bytes.is_none(),
+            "{}",
+            big.summary()
+        );
     }
 
     #[test]
