@@ -53,6 +53,14 @@ pub fn png_crcs(b: &mut [u8]) {
     }
 }
 
+/// [`png_crcs`] for an input that begins as a PNG does (a reader of PNG and JPEG alike): other
+/// inputs are left as they are.
+pub fn png_crcs_if_png(b: &mut [u8]) {
+    if b.starts_with(b"\x89PNG") {
+        png_crcs(b);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -64,5 +72,12 @@ mod tests {
         let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\0IEND\0\0\0\0".to_vec();
         png_crcs(&mut png);
         assert_eq!(&png[16..], &[0xae, 0x42, 0x60, 0x82]);
+        let mut jpeg = b"\xff\xd8\xff\xe0\0\0\0\0IEND\0\0\0\0".to_vec();
+        let before = jpeg.clone();
+        png_crcs_if_png(&mut jpeg);
+        assert_eq!(jpeg, before);
+        png[12] = b'X';
+        png_crcs_if_png(&mut png);
+        assert_eq!(&png[16..], &crc32(b"XEND").to_be_bytes());
     }
 }

@@ -307,6 +307,31 @@ fn image_seeds(format: image::ImageFormat) -> Vec<Vec<u8>> {
     out
 }
 
+/// The PNG seeds of `seeds/` in the formats the `image` crate's encoder does not write
+/// (palettes, 1/2/4-bit grey, a transparency key, grey+alpha and RGB(A) at 16 bits, Adam7,
+/// files cut short), written by [`crate::png::seeds`] (test `image_seeds`).
+fn written_png_seeds() -> Vec<Vec<u8>> {
+    vec![
+        seed!("png-grey1.png"),
+        seed!("png-grey2-adam7.png"),
+        seed!("png-grey4.png"),
+        seed!("png-grey4-adam7-3x1.png"),
+        seed!("png-grey8-trns.png"),
+        seed!("png-greyalpha8.png"),
+        seed!("png-greyalpha16-adam7.png"),
+        seed!("png-rgb16.png"),
+        seed!("png-rgba16-adam7.png"),
+        seed!("png-depth16-adam7.png"),
+        seed!("png-palette1.png"),
+        seed!("png-palette2-adam7.png"),
+        seed!("png-palette4-trns.png"),
+        seed!("png-palette8.png"),
+        seed!("png-palette4-past-the-end.png"),
+        seed!("png-depth16-cut-in-idat.png"),
+        seed!("png-rgb8-no-iend.png"),
+    ]
+}
+
 /// Every target of the library crates' readers.
 pub fn all() -> Vec<Target> {
     let tum_list_words = ["rgb/", ".png", "depth/", "# timestamp filename"];
@@ -577,11 +602,13 @@ pub fn all() -> Vec<Target> {
             t
         },
         {
+            let mut seeds = image_seeds(image::ImageFormat::Png);
+            seeds.extend(written_png_seeds());
             let mut t = target(
                 "png-gray",
                 "PNG images, any pixel format, to 8-bit grey (datasets::decode::read_gray)",
                 "image.png",
-                image_seeds(image::ImageFormat::Png),
+                seeds,
                 &["IHDR", "IDAT", "IEND", "PLTE", "tRNS"],
                 on_file("image.png", |p| {
                     datasets::decode::read_gray(p).map(|_| ()).map_err(e)
@@ -592,11 +619,13 @@ pub fn all() -> Vec<Target> {
             t
         },
         {
+            let mut seeds = image_seeds(image::ImageFormat::Png);
+            seeds.extend(written_png_seeds());
             let mut t = target(
                 "png-depth",
                 "16-bit depth PNG to metres (datasets::decode::read_depth)",
                 "depth.png",
-                image_seeds(image::ImageFormat::Png),
+                seeds,
                 &["IHDR", "IDAT", "IEND"],
                 on_file("depth.png", |p| {
                     datasets::decode::read_depth(p, 5000.0)
@@ -610,7 +639,8 @@ pub fn all() -> Vec<Target> {
         },
         {
             let mut seeds = image_seeds(image::ImageFormat::Jpeg);
-            seeds.extend(image_seeds(image::ImageFormat::Png).into_iter().take(2));
+            seeds.extend(image_seeds(image::ImageFormat::Png));
+            seeds.extend(written_png_seeds());
             let mut t = target(
                 "image-any",
                 "PNG or JPEG of `noisefree features` (datasets::decode::read_image)",
@@ -621,6 +651,7 @@ pub fn all() -> Vec<Target> {
                     datasets::decode::read_image(p).map(|_| ()).map_err(e)
                 }),
             );
+            t.fixup = Some(fixup::png_crcs_if_png);
             t.alloc_factor = IMAGE_ALLOC_FACTOR;
             t
         },
@@ -644,5 +675,14 @@ pub fn scratch() -> PathBuf {
 pub fn remove_scratch() {
     for name in ["lib", "seed"] {
         let _ = std::fs::remove_dir_all(scratch_dir(name));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_image_targets_start_from_every_written_png_seed() {
+        let written: Vec<Vec<u8>> = crate::png::seeds().into_iter().map(|s| s.bytes).collect();
+        assert_eq!(super::written_png_seeds(), written);
     }
 }
