@@ -27,7 +27,7 @@ use crate::module::keyframe_decision::{need_new_keyframe, KeyFrameDecisionInput,
 use crate::module::keyframe_insertion::create_keyframe;
 use crate::module::local_mapping::{LocalMapper, MappingContext, MappingParams, MappingReport};
 use crate::module::loop_closing::{LoopCloser, LoopClosingParams, LoopContext, LoopEvent};
-use crate::module::mcor_clusters::FrameClusters;
+use crate::module::mcor_clusters::ClusterCache;
 use crate::module::pose_estimation::{mcor_frame_gate_with, renormalized, NoiseHooks};
 use crate::module::relocalization::{relocalize, RelocalizationContext, RelocalizationParams};
 use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
@@ -247,9 +247,12 @@ pub struct System {
     loop_closer: LoopCloser,
     /// A global BA computed after a loop, merged once frame `.0` has been tracked.
     pending_gba: Option<(u64, GlobalBaResult)>,
-    /// MC-OR's clusters of the frame being tracked, shared by its gates (forgotten when a
-    /// frame starts: mapping moves what they are made of).
-    mcor_clusters: RefCell<FrameClusters>,
+    /// MC-OR's clusters, shared by every gate while the map stands still (forgotten before a
+    /// frame when the map changed since the last one).
+    mcor_clusters: RefCell<ClusterCache>,
+    /// The map changed (beyond tracking's counters and frame views) since the clusters were
+    /// last forgotten: a keyframe was made or mapped, a loop closed, a global BA merged.
+    map_touched: bool,
 }
 
 /// What local mapping needs of the system (a free function, so that the map and the mapper
@@ -309,7 +312,8 @@ impl System {
             place: None,
             loop_closer: LoopCloser::default(),
             pending_gba: None,
-            mcor_clusters: RefCell::new(FrameClusters::new()),
+            mcor_clusters: RefCell::new(ClusterCache::new()),
+            map_touched: true,
         }
     }
 
@@ -334,6 +338,15 @@ impl System {
         if let Some(k) = self.map.keyframe_mut(kf) {
             k.bow = Some(fb);
         }
+    }
+
+    /// For tests of MC-OR's cluster cache: from now on every cluster it keeps is compared, each
+    /// time a gate uses it, with one rebuilt from the map, and a difference panics. Returns
+    /// how many kept clusters were checked so far.
+    pub fn check_mcor_clusters(&mut self) -> u64 {
+        let cache = self.mcor_clusters.get_mut();
+        cache.set_check(true);
+        cache.checked()
     }
 
     /// The camera.
@@ -494,6 +507,7 @@ impl System {
     /// Map initialisation from one frame (ORB-SLAM2's StereoInitialization): identity pose, a
     /// map point for every keypoint with depth.
     fn initialize(&mut self, cur: &mut TrackedFrame) -> Option<MappingReport> {
+        self.map_touched = true;
         let n_depth = (0..cur.len())
             .filter(|&i| cur.features.depth_of(i).is_some())
             .count();
@@ -538,7 +552,9 @@ impl System {
             .keyframes
             .max_frames
             .unwrap_or(self.camera.fps.round().max(1.0) as u64);
-        self.mcor_clusters.get_mut().invalidate();
+        if std::mem::take(&mut self.map_touched) {
+            self.mcor_clusters.get_mut().invalidate();
+        }
         let hooks = NoiseHooks {
             mcor: self.config.mcor.as_ref(),
             avc: self.config.avc.as_ref(),
@@ -649,6 +665,7 @@ impl System {
             &self.camera,
             &self.config.keyframes,
         ) {
+            self.map_touched = true;
             if let Some((kf, created)) =
                 create_keyframe(cur, &mut self.map, &self.camera, &self.levels)
             {
@@ -707,6 +724,10 @@ impl System {
             };
             if let Some(mp) = self.map.map_point_mut(id) {
                 mp.views.push(view);
+                let views = &self.map.map_point_any(id).expect("just pushed").views;
+                self.mcor_clusters
+                    .get_mut()
+                    .push_view(&self.map, id, &view, views);
             }
         }
     }
@@ -724,6 +745,7 @@ impl System {
         {
             let t = Instant::now();
             if let Some((_, result)) = self.pending_gba.take() {
+                self.map_touched = true;
                 apply_global_ba(&mut self.map, &result, &self.levels);
             }
             stats.time_loop_ms += t.elapsed().as_secs_f64() * 1e3;
@@ -735,6 +757,7 @@ impl System {
             if self.map.keyframe(p.kf).is_none() {
                 continue;
             }
+            self.map_touched = true;
             let ctx = mapping_context(&self.camera, &self.levels, &self.config, &self.ba_cfg);
             let r = self.mapper.process(p.kf, p.created, &mut self.map, &ctx);
             total.time_mapping_ms += r.time_mapping_ms;

@@ -1,42 +1,47 @@
-//! MC-OR's clusters of the map points one frame matched, derived from the map once per frame
-//! and shared by every gate of that frame: the motion-model and local-map pose optimizations,
-//! relocalization's, and the per-frame statistics.
+//! MC-OR's clusters of the map points the frames match, derived from the map once and kept
+//! while the map stands still: shared by every gate of a frame (motion-model, reference-keyframe,
+//! relocalization and local-map pose optimizations, the per-frame statistics) and by the frames
+//! between two changes of the map.
 //!
-//! A cluster is a function of the map: its point's keyframe observations and frame views, placed
-//! with the keyframes' current poses. Tracking a frame changes none of them (only bookkeeping
-//! counters), so within a frame a cluster built once stays right; the system forgets every
-//! cluster when a frame starts. Each cluster is built as
-//! [`map_point_cluster`](super::pose_estimation::map_point_cluster) builds it, feature for
-//! feature and sum for sum, with each keyframe's inverse pose computed once per frame instead
-//! of once per feature, into the reused arena of
-//! [`PreparedClusters`]. Before this cache every gate rebuilt
-//! every cluster: 54 % of an MC-OR run's instructions on the 300-frame kinect sequence.
+//! A cluster is a function of the map: its point's position, keyframe observations and frame
+//! views, placed with the keyframes' current poses. Tracking changes none of them but the views
+//! (a tracked frame appends one to each point it kept), and [`ClusterCache::push_view`] appends
+//! that view to a kept cluster as a rebuild would. Everything else that moves a cluster
+//! (a new keyframe, local mapping and its BA, fusion and culling, loop closing, a global BA) is
+//! the owner's to report with [`ClusterCache::invalidate`]; the [`System`](crate::system::System)
+//! does so before a frame whenever the map changed since the last one. Each cluster is built
+//! as [`map_point_cluster`](super::pose_estimation::map_point_cluster) builds it, feature for
+//! feature, with each keyframe's inverse pose computed once per map state instead of once per
+//! feature. Before this cache every gate rebuilt every cluster: 54 % of an MC-OR run's
+//! instructions on the 300-frame kinect sequence.
 
 use nalgebra::Isometry3;
 
 use crate::data::{KeyFrameId, Map, MapPointId};
 use crate::module::noise::ClusterViews;
 use crate::techniques::mcor::ClusterFeature;
-use crate::techniques::mcor_prepared::PreparedClusters;
+use crate::techniques::mcor_prepared::PreparedCluster;
+use crate::techniques::{FrameView, FrameViews};
 use crate::Camera;
 
 /// A generation no slot is ever tagged with (the cache starts at generation 0).
 const NEVER: u64 = u64::MAX;
 
-/// The frame's prepared clusters and the keyframe poses they were placed with.
+/// The prepared clusters of the map as it stands, and the keyframe poses they were placed with.
 #[derive(Clone, Debug, Default)]
-pub struct FrameClusters {
-    /// The frame the clusters belong to (`None`: empty).
-    frame: Option<u64>,
+pub struct ClusterCache {
     /// The reading the clusters were built with.
     views: Option<ClusterViews>,
     /// Bumped whenever the clusters are forgotten; tags the slots below.
     generation: u64,
-    prepared: PreparedClusters,
-    /// Per map point (by index): the generation and index of its prepared cluster.
-    slots: Vec<(u64, usize)>,
+    /// Per map point (by index): the generation its cluster was built in, and the cluster.
+    clusters: Vec<(u64, PreparedCluster)>,
     /// Per keyframe (by index): its camera-to-world poses this generation.
     keyframes: Vec<KeyFramePoses>,
+    /// Checking: every kept cluster handed out is compared with one rebuilt from the map.
+    check: bool,
+    /// Kept clusters checked so far.
+    checked: u64,
 }
 
 /// A keyframe's camera-to-world poses as the clusters place features with them.
@@ -49,55 +54,84 @@ struct KeyFramePoses {
     twc_any: Option<Isometry3<f64>>,
 }
 
-impl FrameClusters {
+impl ClusterCache {
     /// Empty.
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// Forgets every cluster: the map may have changed.
+    /// Forgets every cluster: the map changed.
     pub fn invalidate(&mut self) {
-        self.frame = None;
         self.generation += 1;
-        self.prepared.clear();
     }
 
-    /// Makes the cache that of frame `frame_id`, forgetting the clusters of any other frame.
-    pub fn for_frame(&mut self, frame_id: u64) {
-        if self.frame != Some(frame_id) {
-            self.invalidate();
-            self.frame = Some(frame_id);
-        }
-    }
-
-    /// The prepared clusters (indices from [`cluster`](Self::cluster)).
-    pub fn prepared(&self) -> &PreparedClusters {
-        &self.prepared
-    }
-
-    /// The index of map point `id`'s cluster in [`prepared`](Self::prepared), built on first
-    /// use in this frame; `None` when the point is not in the map (or culled).
-    pub fn cluster(
+    /// Makes sure map point `id`'s cluster is built for the map as it stands; `false` when the
+    /// point is not in the map (or culled). Read it with [`cluster`](Self::cluster).
+    pub fn prepare(
         &mut self,
         map: &Map,
         id: MapPointId,
         camera: &Camera,
         views: ClusterViews,
-    ) -> Option<usize> {
-        let m = map.map_point(id)?;
+    ) -> bool {
+        if map.map_point(id).is_none() {
+            return false;
+        }
         if self.views != Some(views) {
-            self.generation += 1;
-            self.prepared.clear();
+            self.invalidate();
             self.views = Some(views);
         }
-        if self.slots.len() <= id.index() {
-            self.slots.resize(id.index() + 1, (NEVER, 0));
+        if self.clusters.len() <= id.index() {
+            self.clusters
+                .resize_with(id.index() + 1, || (NEVER, PreparedCluster::default()));
         }
-        let (generation, k) = self.slots[id.index()];
-        if generation == self.generation {
-            return Some(k);
+        if self.clusters[id.index()].0 == self.generation {
+            if self.check {
+                let kept = std::mem::take(&mut self.clusters[id.index()].1);
+                let rebuilt = self.build(map, id, camera, views, PreparedCluster::default(), true);
+                assert_eq!(kept, rebuilt, "the kept cluster of {id} is not the map's");
+                self.checked += 1;
+                self.clusters[id.index()].1 = kept;
+            }
+            return true;
         }
-        self.prepared.begin();
+        let cluster = std::mem::take(&mut self.clusters[id.index()].1);
+        let cluster = self.build(map, id, camera, views, cluster, false);
+        self.clusters[id.index()] = (self.generation, cluster);
+        true
+    }
+
+    /// Checks every cluster the cache hands out again, against one rebuilt from the map (a
+    /// difference panics): for tests of the cache's invalidation.
+    pub fn set_check(&mut self, on: bool) {
+        self.check = on;
+    }
+
+    /// Kept clusters checked against the map since [`set_check`](Self::set_check).
+    pub fn checked(&self) -> u64 {
+        self.checked
+    }
+
+    /// Map point `id`'s cluster built from the map into `cluster`'s buffer, with the keyframe
+    /// poses kept for this generation or, `fresh`, read from the map again.
+    fn build(
+        &mut self,
+        map: &Map,
+        id: MapPointId,
+        camera: &Camera,
+        views: ClusterViews,
+        mut cluster: PreparedCluster,
+        fresh: bool,
+    ) -> PreparedCluster {
+        let poses = |cache: &mut Self, kf| {
+            if fresh {
+                cache.generation_poses(map, kf, NEVER)
+            } else {
+                *cache.poses(map, kf)
+            }
+        };
+        let m = map.map_point(id).expect("checked by the caller");
+        cluster.reset(m.position);
         for (&kf, &idx) in &m.observations {
             let Some(k) = map.keyframe(kf) else {
                 continue;
@@ -105,28 +139,55 @@ impl FrameClusters {
             let Some(pc) = k.features.unproject_camera(idx, camera) else {
                 continue;
             };
-            let Some(twc) = self.poses(map, kf).twc_good else {
+            let Some(twc) = poses(self, kf).twc_good else {
                 continue;
             };
             if let Some(f) = ClusterFeature::new(kf.0 as u64, pc, &twc) {
-                self.prepared.push(&f);
+                cluster.push(&f);
             }
         }
         if views == ClusterViews::EveryFrame {
             let (sum, count) = m.views.folded();
-            self.prepared.add_folded(sum, count);
+            cluster.add_folded(sum, count);
             for v in m.views.views() {
-                let twk = self.poses(map, v.reference).twc_any;
-                self.prepared.push(&v.feature_placed_by(twk.as_ref()));
+                let twk = poses(self, v.reference).twc_any;
+                cluster.push(&v.feature_placed_by(twk.as_ref()));
             }
         }
-        let k = self.prepared.finish(m.position);
-        self.slots[id.index()] = (self.generation, k);
-        Some(k)
+        cluster.seal();
+        cluster
     }
 
-    /// `T_wc` of keyframe `kf` when good (`.0`), and the inverse of
-    /// [`Map::keyframe_pose_any`] (`.1`); both computed once per frame.
+    /// Map point `id`'s cluster, prepared for the map as it stands.
+    ///
+    /// # Panics
+    /// When [`prepare`](Self::prepare) did not build it since the last invalidation (a caller
+    /// bug).
+    pub fn cluster(&self, id: MapPointId) -> &PreparedCluster {
+        let (generation, cluster) = &self.clusters[id.index()];
+        assert_eq!(*generation, self.generation, "cluster of {id} not prepared");
+        cluster
+    }
+
+    /// Tells the cache that `view` was just pushed onto map point `id`'s frame views, which now
+    /// are `views`: a cluster kept for the point takes it as a rebuild would. (Views of a point
+    /// without a kept cluster need nothing: it is built from the map when needed.)
+    pub fn push_view(&mut self, map: &Map, id: MapPointId, view: &FrameView, views: &FrameViews) {
+        if self.views != Some(ClusterViews::EveryFrame) {
+            return;
+        }
+        if !matches!(self.clusters.get(id.index()), Some((g, _)) if *g == self.generation) {
+            return;
+        }
+        let twk = self.poses(map, view.reference).twc_any;
+        let feature = view.feature_placed_by(twk.as_ref());
+        self.clusters[id.index()]
+            .1
+            .push_view(&feature, views.folded(), views.views().len());
+    }
+
+    /// `T_wc` of keyframe `kf` when good, and the inverse of [`Map::keyframe_pose_any`]; both
+    /// computed once per generation.
     fn poses(&mut self, map: &Map, kf: KeyFrameId) -> &KeyFramePoses {
         if self.keyframes.len() <= kf.index() {
             self.keyframes.resize(
@@ -138,14 +199,18 @@ impl FrameClusters {
                 },
             );
         }
-        let slot = &mut self.keyframes[kf.index()];
-        if slot.generation != self.generation {
-            *slot = KeyFramePoses {
-                generation: self.generation,
-                twc_good: map.keyframe(kf).map(|k| k.tcw.inverse()),
-                twc_any: map.keyframe_pose_any(kf).map(|t| t.inverse()),
-            };
+        if self.keyframes[kf.index()].generation != self.generation {
+            self.keyframes[kf.index()] = self.generation_poses(map, kf, self.generation);
         }
-        slot
+        &self.keyframes[kf.index()]
+    }
+
+    /// Keyframe `kf`'s poses read from the map, tagged `generation`.
+    fn generation_poses(&self, map: &Map, kf: KeyFrameId, generation: u64) -> KeyFramePoses {
+        KeyFramePoses {
+            generation,
+            twc_good: map.keyframe(kf).map(|k| k.tcw.inverse()),
+            twc_any: map.keyframe_pose_any(kf).map(|t| t.inverse()),
+        }
     }
 }

@@ -23,7 +23,7 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use super::mcor_clusters::FrameClusters;
+use super::mcor_clusters::ClusterCache;
 use super::noise::{AvcParams, ClusterViews, McorParams};
 use crate::camera::Camera;
 use crate::data::MapPointId;
@@ -60,7 +60,7 @@ pub struct NoiseHooks<'a> {
     /// MC-OR's clusters of the frame being tracked, shared by all its gates (the system's;
     /// `None`: each call builds its own). Only valid while the map does not change: the owner
     /// invalidates it when a frame starts.
-    pub clusters: Option<&'a RefCell<FrameClusters>>,
+    pub clusters: Option<&'a RefCell<ClusterCache>>,
 }
 
 /// The measurement of keypoint `i` (hook point 1). Baseline: stereo / RGB-D keypoints with a
@@ -157,20 +157,19 @@ pub fn mcor_frame_gate(
     params: &McorParams,
     tcw: &Isometry3<f64>,
 ) -> (Vec<usize>, McorOutcome) {
-    mcor_frame_gate_with(frame, map, camera, params, tcw, &mut FrameClusters::new())
+    mcor_frame_gate_with(frame, map, camera, params, tcw, &mut ClusterCache::new())
 }
 
-/// [`mcor_frame_gate`] with the frame's clusters kept in `clusters` (built there on first use,
-/// reused by later gates of the same frame while the map does not change).
+/// [`mcor_frame_gate`] with the clusters kept in `clusters` (built there on first use, reused
+/// while the map does not change; its owner invalidates it when the map does).
 pub fn mcor_frame_gate_with(
     frame: &TrackedFrame,
     map: &Map,
     camera: &Camera,
     params: &McorParams,
     tcw: &Isometry3<f64>,
-    clusters: &mut FrameClusters,
+    clusters: &mut ClusterCache,
 ) -> (Vec<usize>, McorOutcome) {
-    clusters.for_frame(frame.id);
     let twc = tcw.inverse();
     let mut index = Vec::new();
     let mut outcome = McorOutcome {
@@ -182,15 +181,16 @@ pub fn mcor_frame_gate_with(
         let Some(id) = frame.map_points[i] else {
             continue;
         };
-        let Some(k) = clusters.cluster(map, id, camera, params.cluster_views) else {
+        if !clusters.prepare(map, id, camera, params.cluster_views) {
             continue;
-        };
+        }
         index.push(i);
         let point_camera = gate_point(frame.features.unproject_camera(i, camera));
-        let verdict = clusters
-            .prepared()
-            .verdict(k, params, &twc, point_camera.as_ref());
-        outcome.push(verdict);
+        outcome.push(
+            clusters
+                .cluster(id)
+                .verdict(params, &twc, point_camera.as_ref()),
+        );
     }
     (index, outcome)
 }
@@ -449,24 +449,23 @@ pub fn optimize_frame_pose(
     // keeps one, shared with the frame's other gates) and the current features.
     let mut own_clusters = None;
     let mut shared_clusters = hooks.clusters.map(|c| c.borrow_mut());
-    let clusters: &mut FrameClusters = match shared_clusters.as_deref_mut() {
+    let clusters: &mut ClusterCache = match shared_clusters.as_deref_mut() {
         Some(c) => c,
-        None => own_clusters.get_or_insert_with(FrameClusters::new),
+        None => own_clusters.get_or_insert_with(ClusterCache::new),
     };
-    clusters.for_frame(frame.id);
-    let cluster_of: Vec<usize> = match hooks.mcor {
+    let cluster_of: Vec<MapPointId> = match hooks.mcor {
         Some(params) => index
             .iter()
             .map(|&i| {
                 let mp = frame.map_points[i].expect("matched");
-                clusters
-                    .cluster(map, mp, camera, params.cluster_views)
-                    .expect("a matched map point is in the map")
+                let prepared = clusters.prepare(map, mp, camera, params.cluster_views);
+                assert!(prepared, "a matched map point is in the map");
+                mp
             })
             .collect(),
         None => Vec::new(),
     };
-    let clusters: &FrameClusters = clusters;
+    let clusters: &ClusterCache = clusters;
     let gated: Vec<Option<Vector3<f64>>> = match hooks.mcor {
         Some(_) => index
             .iter()
@@ -498,11 +497,13 @@ pub fn optimize_frame_pose(
             }
             if let Some(params) = hooks.mcor {
                 let twc = pose.inverse();
-                let prepared = clusters.prepared();
                 let mut verdicts = Vec::new();
                 last_gate = (0, 0);
                 for (k, e) in excluded.iter_mut().enumerate() {
-                    let verdict = prepared.verdict(cluster_of[k], params, &twc, gated[k].as_ref());
+                    let verdict =
+                        clusters
+                            .cluster(cluster_of[k])
+                            .verdict(params, &twc, gated[k].as_ref());
                     match verdict {
                         McorVerdict::RejectedCluster => last_gate.0 += 1,
                         McorVerdict::RejectedFeature => last_gate.1 += 1,
@@ -788,7 +789,7 @@ mod tests {
                 map.map_point_mut(id).unwrap().views.push(view.unwrap());
             }
         }
-        let mut cache = FrameClusters::new();
+        let mut cache = ClusterCache::new();
         for views in [ClusterViews::Keyframes, ClusterViews::EveryFrame] {
             for depth_normalised in [false, true] {
                 for tau in [0.02, 0.1, 0.3, 0.7] {

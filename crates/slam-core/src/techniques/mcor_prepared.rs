@@ -1,9 +1,10 @@
-//! MC-OR's gate (Algorithm 1, [`mcor_gate`](super::mcor::mcor_gate)) over clusters prepared
-//! once per frame: the same verdicts, bit for bit, at a fraction of the cost.
+//! MC-OR's gate (Algorithm 1, [`mcor_gate`](super::mcor::mcor_gate)) over prepared clusters:
+//! the same verdicts, bit for bit, at a fraction of the cost.
 //!
-//! Within one frame's tracking neither the map points nor their clusters move; only the
-//! frame's pose does, between pose-optimization rounds. So everything of a cluster that does
-//! not involve the current feature X_cur is summed once, in the order
+//! While the map stands still (a frame's tracking, and the frames between two keyframes) the
+//! map points and their clusters do not move; only the frame's pose does, between
+//! pose-optimization rounds, and a tracked frame appends its views. So everything of a cluster
+//! that does not involve the current feature X_cur is summed once, in the order
 //! [`McorCluster::metrics`](super::mcor::McorCluster::metrics) sums it (floating-point sums are
 //! not associative, so the order is part of the result): G's numerator over the folded sum and
 //! the ring, and the sum of |M - X_i| over the ring. A round then adds X_cur to those sums
@@ -12,6 +13,11 @@
 //! when even the bound is under tau_GF with a margin far beyond rounding, the exact mean is
 //! too and the ring is not visited. Only clusters near the threshold, and the depth-normalised
 //! variant, are summed exactly, by the operations of `metrics`.
+//!
+//! A [`PreparedCluster`] keeps every feature it was given (placed, with |M - X_i|), so that a
+//! new frame view is one more feature and a re-sum, not a rebuild: the ring, the folds and
+//! the sums are replayed from the features in the order a `McorCluster` built by
+//! `push_distinct` / `add_folded` would have made them.
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
@@ -22,194 +28,238 @@ use crate::module::noise::McorParams;
 /// the exact mean is computed (rounding of a sum of at most a few dozen norms is ~1e-14).
 const BOUND_MARGIN: f64 = 1e-6;
 
-/// A keypoint's back-projection as [`PreparedClusters::verdict`] takes it: kept only when
-/// it makes a 3-D feature (finite, positive depth: the test of `ClusterFeature::new`), so
-/// that a frame tests it once and not once per round.
+/// A keypoint's back-projection as [`PreparedCluster::verdict`] takes it: kept only when it
+/// makes a 3-D feature (finite, positive depth: the test of `ClusterFeature::new`), so that a
+/// frame tests it once and not once per round.
 pub fn gate_point(point_camera: Option<Vector3<f64>>) -> Option<Vector3<f64>> {
     point_camera.filter(|p| p.iter().all(|x| x.is_finite()) && p.z > 0.0)
 }
 
-/// One ring feature as the gate reads it: its world position and measured depth.
+/// One feature as the gate reads it: its world position, measured depth and |M - X_i|.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct RingFeature {
     point_world: Vector3<f64>,
     depth: f64,
+    to_map_point: f64,
 }
 
-/// A cluster reduced for its map point M (see the module doc).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Prepared {
+/// The cluster of one map point M, reduced for the gate (see the module doc). Built as a
+/// `McorCluster` is: [`new`](Self::new), the keyframe features with [`push`](Self::push), the
+/// frame views' folded sum with [`add_folded`](Self::add_folded), then the views with `push`,
+/// and [`seal`](Self::seal); later views with [`push_view`](Self::push_view).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PreparedCluster {
     /// M, world frame.
     map_point: Vector3<f64>,
-    /// Folded sum, then each ring feature in ring order: G's numerator without X_cur.
-    ring_sum: Vector3<f64>,
-    /// N of Eq. 1 without X_cur (folded and ring features).
-    total: u64,
-    /// Sum of |M - X_i| over the ring, in ring order (metres).
-    ring_to_map_point: f64,
-    /// The ring in the arena: `start..start + len`.
-    start: usize,
-    len: usize,
-}
-
-/// The prepared clusters of one frame's matches (an arena: buffers are reused frame after
-/// frame, nothing is allocated once they have grown).
-#[derive(Clone, Debug, Default)]
-pub struct PreparedClusters {
+    /// Every feature given, keyframe features first (the ring is the last
+    /// [`MCOR_CLUSTER_CAPACITY`] of them, the others were folded).
     features: Vec<RingFeature>,
-    clusters: Vec<Prepared>,
-    /// The cluster being built: where its ring starts, its folded sum and count.
-    open: Option<(usize, Vector3<f64>, u64)>,
+    /// How many of `features` are keyframe features (pushed before `add_folded`).
+    n_keyframe: usize,
+    /// What `add_folded` added.
+    added_sum: Vector3<f64>,
+    added_count: u64,
+    /// Whether `add_folded` was called (later pushes are views).
+    views_started: bool,
+    /// Sealed: the folded sum, then each ring feature in ring order (G's numerator without
+    /// X_cur).
+    ring_sum: Vector3<f64>,
+    /// Sealed: N of Eq. 1 without X_cur.
+    total: u64,
+    /// Sealed: the sum of |M - X_i| over the ring, in ring order.
+    ring_to_map_point: f64,
+    /// Sealed: where the ring starts in `features`.
+    ring_start: usize,
+    /// Sealed: N of Eq. 1 as f64 without / with X_cur.
+    total_f64: [f64; 2],
+    /// Sealed: the number of features in the means as f64 without / with X_cur, and the
+    /// ring's length.
+    n_f64: [f64; 2],
+    ring_len_f64: f64,
 }
 
-impl PreparedClusters {
-    /// Empty.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Forgets every cluster (keeps the buffers).
-    pub fn clear(&mut self) {
+impl PreparedCluster {
+    /// An empty cluster of map point `map_point` (world), keeping its buffer.
+    pub fn reset(&mut self, map_point: Vector3<f64>) {
+        self.map_point = map_point;
         self.features.clear();
-        self.clusters.clear();
-        self.open = None;
+        self.n_keyframe = 0;
+        self.added_sum = Vector3::zeros();
+        self.added_count = 0;
+        self.views_started = false;
+        self.seal();
     }
 
-    /// Number of prepared clusters.
-    pub fn len(&self) -> usize {
-        self.clusters.len()
+    /// An empty cluster of map point `map_point`.
+    pub fn new(map_point: Vector3<f64>) -> Self {
+        let mut c = Self::default();
+        c.reset(map_point);
+        c
     }
 
-    /// Whether none is prepared.
-    pub fn is_empty(&self) -> bool {
-        self.clusters.is_empty()
-    }
-
-    /// Starts a cluster; features go in with [`push`](Self::push) and
-    /// [`add_folded`](Self::add_folded) exactly as into a [`McorCluster`](super::McorCluster)
-    /// built with `push_distinct` / `add_folded`, then [`finish`](Self::finish) seals it.
-    pub fn begin(&mut self) {
-        self.open = Some((self.features.len(), Vector3::zeros(), 0));
-    }
-
-    /// Adds a feature to the open cluster (its source distinct from those in the ring): when
-    /// the ring is full its oldest feature is folded into the running sum, as
-    /// `McorCluster::push_distinct` does.
+    /// Adds a feature whose source is distinct from those already in (as
+    /// `McorCluster::push_distinct`).
     pub fn push(&mut self, feature: &ClusterFeature) {
-        let (start, sum, count) = self.open.as_mut().expect("begin() first");
-        if self.features.len() - *start == MCOR_CLUSTER_CAPACITY {
-            *sum += self.features[*start].point_world;
-            *count += 1;
-            *start += 1;
-        }
+        let point_world = feature.point_world();
         self.features.push(RingFeature {
-            point_world: feature.point_world(),
+            point_world,
             depth: feature.depth(),
+            to_map_point: (self.map_point - point_world).norm() * 1.0,
         });
-    }
-
-    /// Adds features folded elsewhere (their world positions sum to `sum`), as
-    /// `McorCluster::add_folded` does.
-    pub fn add_folded(&mut self, sum: Vector3<f64>, count: u64) {
-        let (_, s, c) = self.open.as_mut().expect("begin() first");
-        *s += sum;
-        *c += count;
-    }
-
-    /// Seals the open cluster for map point `map_point` (world) and returns its index.
-    pub fn finish(&mut self, map_point: Vector3<f64>) -> usize {
-        let (start, folded_sum, folded_count) = self.open.take().expect("begin() first");
-        let len = self.features.len() - start;
-        let mut ring_sum = folded_sum;
-        let mut ring_to_map_point = 0.0;
-        for f in &self.features[start..] {
-            ring_sum += f.point_world;
-            ring_to_map_point += (map_point - f.point_world).norm() * 1.0;
+        if !self.views_started {
+            self.n_keyframe += 1;
         }
-        self.clusters.push(Prepared {
-            map_point,
-            ring_sum,
-            total: folded_count + len as u64,
-            ring_to_map_point,
-            start,
-            len,
-        });
-        self.clusters.len() - 1
     }
 
-    /// Algorithm 1's verdict for the match of prepared cluster `k` whose keypoint
-    /// back-projects to `point_camera` (camera frame; `None` without depth; passed through
-    /// [`gate_point`] once per match), with the frame at `twc` (camera to world): the verdict
+    /// Adds features folded elsewhere whose world positions sum to `sum` (as
+    /// `McorCluster::add_folded`); called once, between the keyframe features and the views.
+    pub fn add_folded(&mut self, sum: Vector3<f64>, count: u64) {
+        self.added_sum += sum;
+        self.added_count += count;
+        self.views_started = true;
+    }
+
+    /// Replays the ring and the folds, and sums what the gate needs.
+    pub fn seal(&mut self) {
+        let n = self.features.len();
+        let cap = MCOR_CLUSTER_CAPACITY;
+        // A push folds the feature `cap` places before it once the ring is full: the keyframe
+        // features' folds come before `add_folded`, the views' after.
+        let keyframe_folds = self.n_keyframe.saturating_sub(cap);
+        let all_folds = n.saturating_sub(cap);
+        let mut folded = Vector3::zeros();
+        let mut count = 0u64;
+        for f in &self.features[..keyframe_folds] {
+            folded += f.point_world;
+            count += 1;
+        }
+        folded += self.added_sum;
+        count += self.added_count;
+        for f in &self.features[keyframe_folds..all_folds] {
+            folded += f.point_world;
+            count += 1;
+        }
+        let mut ring_sum = folded;
+        let mut ring_to_map_point = 0.0;
+        for f in &self.features[all_folds..] {
+            ring_sum += f.point_world;
+            ring_to_map_point += f.to_map_point;
+        }
+        self.ring_sum = ring_sum;
+        self.total = count + (n - all_folds) as u64;
+        self.ring_to_map_point = ring_to_map_point;
+        self.ring_start = all_folds;
+        let ring = (n - all_folds) as u64;
+        self.total_f64 = [self.total as f64, (self.total + 1) as f64];
+        self.n_f64 = [ring as f64, (ring + 1) as f64];
+        self.ring_len_f64 = (n - all_folds) as f64;
+    }
+
+    /// Appends a frame view to a sealed cluster and re-seals it, as a cluster rebuilt from a
+    /// map point whose [`FrameViews`](super::FrameViews) just took `feature` would be:
+    /// `views_folded` is the views' folded sum and count after the push, and `views_kept`
+    /// how many views they hold individually (their oldest ones beyond it are dropped here,
+    /// since the views folded them).
+    pub fn push_view(
+        &mut self,
+        feature: &ClusterFeature,
+        views_folded: (Vector3<f64>, u64),
+        views_kept: usize,
+    ) {
+        self.push(feature);
+        let views = self.features.len() - self.n_keyframe;
+        if views > views_kept {
+            self.features
+                .drain(self.n_keyframe..self.n_keyframe + (views - views_kept));
+        }
+        self.added_sum = views_folded.0;
+        self.added_count = views_folded.1;
+        self.views_started = true;
+        self.seal();
+    }
+
+    /// Algorithm 1's verdict for a match of this cluster whose keypoint back-projects to
+    /// `point_camera` (camera frame; `None` without depth; passed through [`gate_point`] once
+    /// per match), with the frame at `twc` (camera to world): the verdict
     /// [`mcor_gate`](super::mcor::mcor_gate) gives for the same cluster, bit for bit.
     pub fn verdict(
         &self,
-        k: usize,
         params: &McorParams,
         twc: &Isometry3<f64>,
         point_camera: Option<&Vector3<f64>>,
     ) -> McorVerdict {
-        let c = &self.clusters[k];
+        let ring = &self.features[self.ring_start..];
         // X_cur as `ClusterFeature::new` places it.
-        let cur = point_camera.map(|p| RingFeature {
-            point_world: (twc * Point3::from(*p)).coords,
-            depth: p.z,
+        let cur = point_camera.map(|p| {
+            let point_world = (twc * Point3::from(*p)).coords;
+            RingFeature {
+                point_world,
+                depth: p.z,
+                to_map_point: 0.0,
+            }
         });
-        let n_features = c.len + usize::from(cur.is_some());
+        let n_features = ring.len() + usize::from(cur.is_some());
         if n_features == 0 {
             return McorVerdict::Kept;
         }
         // G (Eq. 1): the sums of `McorCluster::centroid_with`.
-        let mut sum = c.ring_sum;
-        let mut total = c.total;
+        let mut sum = self.ring_sum;
         if let Some(f) = &cur {
             sum += f.point_world;
-            total += 1;
         }
-        let g = sum / total as f64;
-        let m = &c.map_point;
-        let n = n_features as f64;
-        let ring = &self.features[c.start..c.start + c.len];
-        let (cl1, cl2, cl3) = if params.depth_normalised {
-            exact_metrics(m, &g, ring, cur.as_ref(), true)
-        } else {
-            let cur_to_m = cur.as_ref().map(|f| (m - f.point_world).norm() * 1.0);
-            let mut sum_m = c.ring_to_map_point;
-            if let Some(d) = cur_to_m {
-                sum_m += d;
-            }
-            let cl1 = sum_m / n;
-            let cl3 = (m - g).norm();
-            if cl1 > params.tau_mf || cl3 > params.tau_mg {
+        let with_current = usize::from(cur.is_some());
+        let g = sum / self.total_f64[with_current];
+        let m = &self.map_point;
+        let n = self.n_f64[with_current];
+        if params.depth_normalised {
+            let (cl1, cl2, cl3) = exact_metrics(m, &g, ring, cur.as_ref(), true);
+            if cl1 > params.tau_mf || cl2 > params.tau_gf || cl3 > params.tau_mg {
                 return McorVerdict::RejectedCluster;
             }
-            // CL2 <= (len |G - M| + sum |M - X_i| + |G - X_cur|) / n.
-            let cur_to_g = cur.as_ref().map_or(0.0, |f| (g - f.point_world).norm());
-            let bound = c.len as f64 * cl3 + c.ring_to_map_point + cur_to_g;
-            if bound * (1.0 + BOUND_MARGIN) < params.tau_gf * n * (1.0 - BOUND_MARGIN) {
-                (cl1, 0.0, cl3)
-            } else {
-                exact_metrics(m, &g, ring, cur.as_ref(), false)
-            }
-        };
-        if cl1 > params.tau_mf || cl2 > params.tau_gf || cl3 > params.tau_mg {
+            return match &cur {
+                Some(f) => {
+                    let scale = 1.0 / f.depth;
+                    let to_m = (m - f.point_world).norm() * scale;
+                    let to_g = (g - f.point_world).norm() * scale;
+                    if to_m > params.tau_mf || to_g > params.tau_gf {
+                        McorVerdict::RejectedFeature
+                    } else {
+                        McorVerdict::Kept
+                    }
+                }
+                None => McorVerdict::Kept,
+            };
+        }
+        // FL1 and FL2 of X_cur (Eq. 2, 3), which CL1 and the CL2 bound use too.
+        let fl = cur.as_ref().map(|f| {
+            (
+                (m - f.point_world).norm() * 1.0,
+                (g - f.point_world).norm() * 1.0,
+            )
+        });
+        let mut sum_m = self.ring_to_map_point;
+        if let Some((to_m, _)) = fl {
+            sum_m += to_m;
+        }
+        let cl1 = sum_m / n;
+        let cl3 = (m - g).norm();
+        if cl1 > params.tau_mf || cl3 > params.tau_mg {
             return McorVerdict::RejectedCluster;
         }
-        match &cur {
-            Some(f) => {
-                let scale = if params.depth_normalised {
-                    1.0 / f.depth
-                } else {
-                    1.0
-                };
-                let to_m = (m - f.point_world).norm() * scale;
-                let to_g = (g - f.point_world).norm() * scale;
-                if to_m > params.tau_mf || to_g > params.tau_gf {
-                    McorVerdict::RejectedFeature
-                } else {
-                    McorVerdict::Kept
-                }
+        // CL2 <= (len |G - M| + sum |M - X_i| + |G - X_cur|) / n.
+        let bound = self.ring_len_f64 * cl3 + self.ring_to_map_point + fl.map_or(0.0, |f| f.1);
+        let certain = bound * (1.0 + BOUND_MARGIN) < params.tau_gf * n * (1.0 - BOUND_MARGIN);
+        if !certain {
+            let (_, cl2, _) = exact_metrics(m, &g, ring, cur.as_ref(), false);
+            if cl2 > params.tau_gf {
+                return McorVerdict::RejectedCluster;
             }
-            None => McorVerdict::Kept,
+        }
+        match fl {
+            Some((to_m, to_g)) if to_m > params.tau_mf || to_g > params.tau_gf => {
+                McorVerdict::RejectedFeature
+            }
+            _ => McorVerdict::Kept,
         }
     }
 }
@@ -255,10 +305,10 @@ mod tests {
         n: usize,
         split: usize,
         folded: u64,
-        arena: &mut PreparedClusters,
-    ) -> (McorCluster, usize) {
+    ) -> (McorCluster, PreparedCluster) {
+        let m = centre + Vector3::new(0.01, -0.02, 0.015);
         let mut cluster = McorCluster::new();
-        arena.begin();
+        let mut arena = PreparedCluster::new(m);
         let folded_sum =
             centre * folded as f64 + Vector3::new(gaussian(g), gaussian(g), gaussian(g)) * spread;
         for k in 0..n {
@@ -280,18 +330,16 @@ mod tests {
             cluster.add_folded(folded_sum, folded);
             arena.add_folded(folded_sum, folded);
         }
-        let k = arena.finish(centre + Vector3::new(0.01, -0.02, 0.015));
-        (cluster, k)
+        arena.seal();
+        (cluster, arena)
     }
 
     #[test]
     fn verdicts_are_those_of_the_gate_over_whole_clusters() {
         let mut g = rng(5);
-        let mut arena = PreparedClusters::new();
         let mut near_threshold = 0;
         let mut rejected = [0usize; 3];
         for trial in 0..3000 {
-            arena.clear();
             let centre = Vector3::new(
                 g.random_range(-1.0..1.0),
                 g.random_range(-1.0..1.0),
@@ -301,7 +349,7 @@ mod tests {
             let n = g.random_range(0..45);
             let split = g.random_range(0..=n);
             let folded = [0, 0, 3, 40][trial % 4 / 2 + trial % 2];
-            let (cluster, k) = both(&mut g, centre, spread, n, split, folded, &mut arena);
+            let (cluster, prepared) = both(&mut g, centre, spread, n, split, folded);
             let twc = Isometry3::from_parts(
                 Translation3::new(gaussian(&mut g) * 0.1, 0.1, -2.0),
                 UnitQuaternion::from_euler_angles(0.02, gaussian(&mut g) * 0.1, 0.0),
@@ -342,7 +390,7 @@ mod tests {
                 }],
             )
             .verdicts[0];
-            let got = arena.verdict(k, &params, &twc, gate_point(current).as_ref());
+            let got = prepared.verdict(&params, &twc, gate_point(current).as_ref());
             assert_eq!(
                 got, expected,
                 "trial {trial}: n {n}, split {split}, folded {folded}"
