@@ -75,7 +75,7 @@ pub fn measurement_for(
     estimate: &Vector3<f64>,
 ) -> Measurement {
     if let Some(r) = avc_residual_for(camera, features, i, hooks, estimate) {
-        return Measurement::Custom(r);
+        return Measurement::VirtualCamera(r);
     }
     let kp = &features.keypoints[i];
     match features.u_right_of(i) {
@@ -399,7 +399,7 @@ pub fn optimize_frame_pose(
         let measurement = match avc_residual_for(camera, &frame.features, i, hooks, &estimate) {
             Some(r) => {
                 avc.push((obs.len(), r.clone()));
-                Measurement::Custom(r)
+                Measurement::VirtualCamera(r)
             }
             None => measurement_for(camera, &frame.features, i, hooks, &estimate),
         };

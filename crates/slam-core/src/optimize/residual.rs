@@ -14,6 +14,7 @@ use std::sync::Arc;
 use nalgebra::{Matrix3, Matrix4x3, Vector3, Vector4};
 
 use super::fixed_mul::transpose_mul;
+use crate::techniques::VirtualCameraResidual;
 use crate::Camera;
 
 /// Largest residual dimension the solvers support (the AVC residual is 4-D).
@@ -86,8 +87,12 @@ pub enum Measurement {
         /// Column in the (real or virtual) right image.
         ur: f64,
     },
-    /// Any other residual of the camera-frame point (the AVC extension point).
+    /// Any other residual of the camera-frame point (the extension point).
     Custom(Arc<dyn CameraResidual>),
+    /// The paper's 4-D AVC residual: what [`Measurement::Custom`] would do with it, the same
+    /// operations, called directly rather than through a trait object so that the solvers'
+    /// loops inline it (AVC's residuals are evaluated millions of times a sequence).
+    VirtualCamera(Arc<VirtualCameraResidual>),
 }
 
 impl Measurement {
@@ -107,6 +112,7 @@ impl Measurement {
             Measurement::Mono { .. } => 2,
             Measurement::Stereo { .. } => 3,
             Measurement::Custom(c) => c.dof(),
+            Measurement::VirtualCamera(_) => 4,
         }
     }
 
@@ -131,6 +137,7 @@ impl Measurement {
             Measurement::Mono { u, v } => builtin_residual(camera, *u, *v, None, p_c),
             Measurement::Stereo { u, v, ur } => builtin_residual(camera, *u, *v, Some(*ur), p_c),
             Measurement::Custom(c) => return c.evaluate(camera, p_c),
+            Measurement::VirtualCamera(c) => return c.block(camera, p_c),
         };
         Some(ResidualBlock {
             residual: Vector4::from(r),
@@ -193,6 +200,7 @@ pub(crate) fn observation_chi2(
         Measurement::Mono { u, v } => builtin_residual(camera, *u, *v, None, p_c).0,
         Measurement::Stereo { u, v, ur } => builtin_residual(camera, *u, *v, Some(*ur), p_c).0,
         Measurement::Custom(c) => c.residual(camera, p_c)?.into(),
+        Measurement::VirtualCamera(c) => c.residual_rows(camera, p_c)?.into(),
     };
     Some(inv_sigma2 * Vector4::from(r).norm_squared())
 }
@@ -214,7 +222,7 @@ pub(crate) fn linearize_observation(
     let (r, j) = match measurement {
         Measurement::Mono { u, v } => builtin_residual(camera, *u, *v, None, p_c),
         Measurement::Stereo { u, v, ur } => builtin_residual(camera, *u, *v, Some(*ur), p_c),
-        Measurement::Custom(_) => {
+        Measurement::Custom(_) | Measurement::VirtualCamera(_) => {
             let block = measurement.evaluate(camera, p_c)?;
             let chi2 = inv_sigma2 * block.residual.norm_squared();
             let w = inv_sigma2 * robust_weight(chi2);

@@ -48,11 +48,16 @@ pub const DIRECTION_EPSILON: f64 = 1e-9;
 /// with D' = |d| unit(m) (Eq. 8, 10). Falls back to +x `(1, 0)` when that component is at or
 /// below [`DIRECTION_EPSILON`] or `m` is the camera centre.
 pub fn virtual_camera_direction(d: &Vector3<f64>, m: &Vector3<f64>) -> Vector2<f64> {
+    direction_with_range(d, d.norm(), m)
+}
+
+/// [`virtual_camera_direction`] given `d_norm = |d|` (a residual keeps it).
+fn direction_with_range(d: &Vector3<f64>, d_norm: f64, m: &Vector3<f64>) -> Vector2<f64> {
     let m_norm = m.norm();
     if m_norm.is_nan() || m_norm <= 0.0 || !m_norm.is_finite() {
         return Vector2::new(1.0, 0.0);
     }
-    let d_prime = m * (d.norm() / m_norm);
+    let d_prime = m * (d_norm / m_norm);
     let in_plane = Vector2::new(d_prime.x - d.x, d_prime.y - d.y);
     let len = in_plane.norm();
     if len > DIRECTION_EPSILON && len.is_finite() {
@@ -78,6 +83,8 @@ pub struct VirtualCameraResidual {
     measured_point: Vector3<f64>,
     /// |CD|, metres.
     range: f64,
+    /// 1 / |CD|, computed once.
+    inv_range: f64,
     /// Virtual camera baseline b, metres.
     baseline: f64,
     /// The virtual camera centre (t_x, t_y) = b (cos a, sin a), a = `atan2` of the chosen
@@ -109,6 +116,7 @@ impl VirtualCameraResidual {
             v,
             measured_point,
             range: measured_point.norm(),
+            inv_range: 1.0 / measured_point.norm(),
             baseline,
             centre_bits: [AtomicU64::new(0), AtomicU64::new(0)],
         };
@@ -119,7 +127,7 @@ impl VirtualCameraResidual {
     /// Re-chooses the virtual camera from the estimate `p_c` of the map point in camera
     /// coordinates (Eq. 8-11). The solvers treat the direction as fixed until the next call.
     pub fn aim_at(&self, p_c: &Vector3<f64>) {
-        let dir = virtual_camera_direction(&self.measured_point, p_c);
+        let dir = direction_with_range(&self.measured_point, self.range, p_c);
         let angle = dir.y.atan2(dir.x);
         let t = Vector2::new(angle.cos(), angle.sin()) * self.baseline;
         self.centre_bits[0].store(t.x.to_bits(), Ordering::Relaxed);
@@ -140,18 +148,10 @@ impl VirtualCameraResidual {
         self.measured_point
     }
 
-    /// The virtual baseline b (metres).
-    pub fn baseline(&self) -> f64 {
-        self.baseline
-    }
-}
-
-impl CameraResidual for VirtualCameraResidual {
-    fn dof(&self) -> usize {
-        4
-    }
-
-    fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock> {
+    /// The residual and its Jacobian at the camera-frame point `p_c` (what
+    /// [`CameraResidual::evaluate`] returns; `None` where the residual is undefined).
+    #[inline]
+    pub fn block(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock> {
         let (x, y, z) = (p_c.x, p_c.y, p_c.z);
         let n = p_c.norm();
         if z.is_nan() || z <= 0.0 || n.is_nan() || n <= 0.0 || !n.is_finite() {
@@ -159,7 +159,7 @@ impl CameraResidual for VirtualCameraResidual {
         }
         let t = self.virtual_camera();
         let inv_z = 1.0 / z;
-        let inv_rho = 1.0 / self.range;
+        let inv_rho = self.inv_range;
         // g = 1/Z_D' - 1/Z_M with Z_D' = |D| Z_M / |M|.
         let g = (n * inv_rho - 1.0) * inv_z;
         // dg/dM = M / (|M| |D| Z_M) - (|M|/|D| - 1) / Z_M^2 * e_z.
@@ -185,9 +185,10 @@ impl CameraResidual for VirtualCameraResidual {
         })
     }
 
-    /// The residual rows of [`evaluate`](Self::evaluate), the same operations without the
+    /// The residual rows of [`block`](Self::block), the same operations without the
     /// Jacobian: what the solvers' cost and chi2 tests need, most of their evaluations.
-    fn residual(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<Vector4<f64>> {
+    #[inline]
+    pub fn residual_rows(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<Vector4<f64>> {
         let (x, y, z) = (p_c.x, p_c.y, p_c.z);
         let n = p_c.norm();
         if z.is_nan() || z <= 0.0 || n.is_nan() || n <= 0.0 || !n.is_finite() {
@@ -195,7 +196,7 @@ impl CameraResidual for VirtualCameraResidual {
         }
         let t = self.virtual_camera();
         let inv_z = 1.0 / z;
-        let inv_rho = 1.0 / self.range;
+        let inv_rho = self.inv_range;
         let g = (n * inv_rho - 1.0) * inv_z;
         let (ax, ay) = (camera.fx * t.x, camera.fy * t.y);
         Some(Vector4::new(
@@ -204,6 +205,25 @@ impl CameraResidual for VirtualCameraResidual {
             ax * g,
             ay * g,
         ))
+    }
+
+    /// The virtual baseline b (metres).
+    pub fn baseline(&self) -> f64 {
+        self.baseline
+    }
+}
+
+impl CameraResidual for VirtualCameraResidual {
+    fn dof(&self) -> usize {
+        4
+    }
+
+    fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock> {
+        self.block(camera, p_c)
+    }
+
+    fn residual(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<Vector4<f64>> {
+        self.residual_rows(camera, p_c)
     }
 }
 
@@ -220,7 +240,7 @@ pub fn avc_measurement(
     estimate: &Vector3<f64>,
 ) -> Option<Measurement> {
     VirtualCameraResidual::new(camera, u, v, depth, params.baseline, estimate)
-        .map(|r| Measurement::Custom(Arc::new(r)))
+        .map(|r| Measurement::VirtualCamera(Arc::new(r)))
 }
 
 #[cfg(test)]
