@@ -24,7 +24,7 @@ use std::sync::Arc;
 use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::mcor_clusters::ClusterCache;
-use super::noise::{AvcParams, ClusterViews, McorParams};
+use super::noise::{AvcAim, AvcParams, ClusterViews, McorParams};
 use crate::camera::Camera;
 use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
@@ -110,6 +110,10 @@ fn avc_residual_for(
         avc.baseline,
         estimate,
     )
+    .map(|r| match avc.aim {
+        AvcAim::Angle => r,
+        aim => r.with_aim(aim, estimate),
+    })
     .map(Arc::new)
 }
 

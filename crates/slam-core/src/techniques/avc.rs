@@ -35,7 +35,7 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix4x3, Vector2, Vector3, Vector4};
 
-use crate::module::noise::AvcParams;
+use crate::module::noise::{AvcAim, AvcParams};
 use crate::optimize::{CameraResidual, Measurement, ResidualBlock};
 use crate::Camera;
 
@@ -85,6 +85,8 @@ pub struct VirtualCameraResidual {
     range: f64,
     /// 1 / |CD|, computed once.
     inv_range: f64,
+    /// How [`aim_at`](Self::aim_at) places the virtual camera.
+    aim: AvcAim,
     /// Virtual camera baseline b, metres.
     baseline: f64,
     /// The virtual camera centre (t_x, t_y) = b (cos a, sin a), a = `atan2` of the chosen
@@ -117,6 +119,7 @@ impl VirtualCameraResidual {
             measured_point,
             range: measured_point.norm(),
             inv_range: 1.0 / measured_point.norm(),
+            aim: AvcAim::Angle,
             baseline,
             centre_bits: [AtomicU64::new(0), AtomicU64::new(0)],
         };
@@ -124,12 +127,24 @@ impl VirtualCameraResidual {
         Some(residual)
     }
 
+    /// The residual placing its virtual camera by `aim` (re-aimed from `estimate`).
+    pub fn with_aim(mut self, aim: AvcAim, estimate: &Vector3<f64>) -> Self {
+        self.aim = aim;
+        self.aim_at(estimate);
+        self
+    }
+
     /// Re-chooses the virtual camera from the estimate `p_c` of the map point in camera
     /// coordinates (Eq. 8-11). The solvers treat the direction as fixed until the next call.
     pub fn aim_at(&self, p_c: &Vector3<f64>) {
         let dir = direction_with_range(&self.measured_point, self.range, p_c);
-        let angle = dir.y.atan2(dir.x);
-        let t = Vector2::new(angle.cos(), angle.sin()) * self.baseline;
+        let t = match self.aim {
+            AvcAim::Angle => {
+                let angle = dir.y.atan2(dir.x);
+                Vector2::new(angle.cos(), angle.sin()) * self.baseline
+            }
+            AvcAim::Direct => dir * self.baseline,
+        };
         self.centre_bits[0].store(t.x.to_bits(), Ordering::Relaxed);
         self.centre_bits[1].store(t.y.to_bits(), Ordering::Relaxed);
     }
@@ -240,6 +255,7 @@ pub fn avc_measurement(
     estimate: &Vector3<f64>,
 ) -> Option<Measurement> {
     VirtualCameraResidual::new(camera, u, v, depth, params.baseline, estimate)
+        .map(|r| r.with_aim(params.aim, estimate))
         .map(|r| Measurement::VirtualCamera(Arc::new(r)))
 }
 
@@ -530,6 +546,63 @@ mod tests {
             dt < 1e-4 && dr < 0.01,
             "re-aimed differs by {dt} m {dr} deg"
         );
+    }
+
+    #[test]
+    fn direct_aim_places_the_camera_where_the_angle_does_and_solves_the_same_pose() {
+        let camera = Camera::tum_fr3();
+        let mut g = rng(21);
+        for _ in 0..500 {
+            let (u, v) = (g.random_range(0.0..640.0), g.random_range(0.0..480.0));
+            let depth = g.random_range(0.3..8.0);
+            let d = camera.unproject(u, v, depth);
+            let aim = d + Vector3::new(gaussian(&mut g), gaussian(&mut g), gaussian(&mut g)) * 0.05;
+            let angle = VirtualCameraResidual::new(&camera, u, v, depth, 0.09, &aim).unwrap();
+            let direct = VirtualCameraResidual::new(&camera, u, v, depth, 0.09, &aim)
+                .unwrap()
+                .with_aim(AvcAim::Direct, &aim);
+            let gap = (angle.virtual_camera() - direct.virtual_camera()).norm();
+            assert!(gap < 1e-16, "{gap} m: a few ulps of b");
+        }
+        // Re-aimed before every round, as the pose-estimation hook does, both aims solve the
+        // same pose to far below a micrometre (their bits differ).
+        let scene = rgbd_scene(250, 0.1, 3);
+        let start = perturb(&true_pose(), 0.08, 4f64.to_radians(), &mut rng(4));
+        let cfg = PoseOptConfig::default();
+        let solve = |aim: AvcAim| {
+            let (obs, residuals) = observations(&scene, &start, true);
+            let residuals: Vec<_> = residuals
+                .iter()
+                .zip(&obs)
+                .map(|(r, o)| {
+                    let estimate = (start * Point3::from(o.point_world)).coords;
+                    let (u, v) = (r.u, r.v);
+                    let depth = r.measured_point.z;
+                    Arc::new(
+                        VirtualCameraResidual::new(&camera, u, v, depth, 0.09, &estimate)
+                            .unwrap()
+                            .with_aim(aim, &estimate),
+                    )
+                })
+                .collect();
+            let obs: Vec<PoseObservation> = obs
+                .iter()
+                .zip(&residuals)
+                .map(|(o, r)| PoseObservation {
+                    measurement: Measurement::VirtualCamera(r.clone()),
+                    ..o.clone()
+                })
+                .collect();
+            pose_optimization_with(&camera, &start, &obs, &cfg, &mut |_, pose, _| {
+                for (o, r) in obs.iter().zip(&residuals) {
+                    r.aim_at(&(pose * Point3::from(o.point_world)).coords);
+                }
+            })
+        };
+        let (a, d) = (solve(AvcAim::Angle), solve(AvcAim::Direct));
+        let (dt, dr) = pose_error(&a.pose, &d.pose);
+        assert!(dt < 1e-9 && dr < 1e-7, "aims differ by {dt} m {dr} deg");
+        assert_eq!(a.inliers, d.inliers);
     }
 
     #[test]
