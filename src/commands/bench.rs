@@ -305,3 +305,84 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(configs: &[&str], frames: usize) -> BenchArgs {
+        BenchArgs {
+            seq: Some("clean".into()),
+            path: None,
+            frames,
+            configs: configs.iter().map(|c| c.to_string()).collect(),
+            repeat: 2,
+            sweep_seeds: 1,
+            mapping_lag: None,
+            config: None,
+            vocabulary: Some("none".into()),
+            synth_seed: 0,
+            data_dir: None,
+            json: None,
+            profile: false,
+        }
+    }
+
+    #[test]
+    fn bench_reports_every_configuration_with_its_trajectory_and_the_sweep() {
+        let dir = std::env::temp_dir().join(format!("nf-bench-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let json = dir.join("bench.json");
+        let mut a = args(&["orb", "mcor", "avc", "mcor+avc", "rc"], 30);
+        a.json = Some(json.clone());
+        run(a).unwrap();
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        assert_eq!(report["frames"], 30);
+        let configs = report["configs"].as_array().unwrap();
+        let names: Vec<&str> = configs
+            .iter()
+            .map(|c| c["config"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, ["orb", "mcor", "avc", "mcor+avc", "rc"]);
+        for c in configs {
+            // Two runs each, the fastest kept, the same trajectory (checked by the bench).
+            assert_eq!(c["runs_s"].as_array().unwrap().len(), 2);
+            let fps = c["fps"].as_f64().unwrap();
+            let fastest = c["runs_s"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|s| s.as_f64().unwrap())
+                .fold(f64::INFINITY, f64::min);
+            assert!((fps - 30.0 / fastest).abs() < 1e-6 * fps);
+            assert_eq!(c["hash"].as_str().unwrap().len(), 16);
+            // The clean preset is tracked to well under a centimetre by every configuration.
+            assert!(c["ate_m"].as_f64().unwrap() < 0.01, "{c}");
+        }
+        assert_eq!(report["sweep_runs"], 4);
+        let sweep = report["sweep_fps"].as_f64().unwrap();
+        assert!(sweep > 0.0 && sweep.is_finite());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn bad_arguments_are_refused_before_anything_runs() {
+        let e = run(args(&["orb", "mcorr"], 40)).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("unknown configuration \"mcorr\""),
+            "{e:#}"
+        );
+        let e = run(args(&["orb"], 0)).unwrap_err();
+        assert!(format!("{e:#}").contains("--frames"), "{e:#}");
+        let dir = std::env::temp_dir().join(format!("nf-bench-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let toml = dir.join("bad.toml");
+        std::fs::write(&toml, "[orb]\nscale_factor = 0.5\n").unwrap();
+        let mut a = args(&["orb"], 10);
+        a.config = Some(toml);
+        let e = run(a).unwrap_err();
+        assert!(format!("{e:#}").contains("scale_factor"), "{e:#}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
