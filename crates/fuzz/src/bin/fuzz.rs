@@ -4,10 +4,11 @@
 //! ```text
 //! fuzz [--target NAME|all] [--secs N] [--inputs N] [--seed S] [--out DIR] [--tally FILE] [--list]
 //! fuzz --target NAME --replay FILE
-//! fuzz --summarize TALLY
+//! fuzz --summarize TALLY [--seeds S,S...]
 //! ```
 //! `--summarize` prints the totals of a tally file per target as a Markdown table (inputs,
-//! rules broken, the largest peak memory and input), the table of results/fuzz/README.md.
+//! rules broken, the largest peak memory and input), the table of results/fuzz/README.md;
+//! with `--seeds`, of the runs from those seeds only.
 //! `--replay` reads one saved input with the target's reader and prints the outcome, time and
 //! memory, judged by a long run's rules (exit status 1 when it breaks one; a panic is the
 //! reader's own, with its backtrace under `RUST_BACKTRACE=1`).
@@ -32,6 +33,7 @@ struct Args {
     list: bool,
     replay: Option<PathBuf>,
     summarize: Option<PathBuf>,
+    seeds: Option<Vec<u64>>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -45,6 +47,7 @@ fn parse_args() -> Result<Args, String> {
         list: false,
         replay: None,
         summarize: None,
+        seeds: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -77,10 +80,22 @@ fn parse_args() -> Result<Args, String> {
             "--list" => a.list = true,
             "--replay" => a.replay = Some(PathBuf::from(value()?)),
             "--summarize" => a.summarize = Some(PathBuf::from(value()?)),
+            "--seeds" => {
+                let v = value()?;
+                a.seeds = Some(
+                    v.split(',')
+                        .map(|s| s.trim().parse())
+                        .collect::<Result<_, _>>()
+                        .map_err(|_| {
+                            format!("--seeds {v}: must be whole numbers, comma-separated")
+                        })?,
+                );
+            }
             "-h" | "--help" => {
                 return Err(
                     "usage: fuzz [--target NAME|all] [--secs N] [--inputs N] [--seed S] \
-                            [--out DIR] [--tally FILE] [--list] [--replay FILE] [--summarize TALLY]"
+                            [--out DIR] [--tally FILE] [--list] [--replay FILE] \
+                            [--summarize TALLY [--seeds S,S...]]"
                         .into(),
                 )
             }
@@ -90,9 +105,9 @@ fn parse_args() -> Result<Args, String> {
     Ok(a)
 }
 
-/// Per-target totals of a tally file as a Markdown table; the tally's lines are those
-/// `append_tally` writes.
-fn summarize(path: &PathBuf) -> Result<String, String> {
+/// Per-target totals of a tally file as a Markdown table, of the runs from `seeds` only when
+/// given; the tally's lines are those `append_tally` writes.
+fn summarize(path: &PathBuf, seeds: Option<&[u64]>) -> Result<String, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     // target -> (runs, seconds, inputs, panics, slow, alloc, nameless, peak, largest)
     let mut totals: std::collections::BTreeMap<String, [f64; 9]> = Default::default();
@@ -110,6 +125,11 @@ fn summarize(path: &PathBuf) -> Result<String, String> {
         };
         if f.len() != 13 {
             return Err(format!("{}:{}: expected 13 fields", path.display(), i + 1));
+        }
+        if let Some(seeds) = seeds {
+            if !seeds.contains(&(num(1)? as u64)) {
+                continue;
+            }
         }
         let t = totals.entry(f[0].to_string()).or_insert([0.0; 9]);
         t[0] += 1.0;
@@ -150,7 +170,7 @@ fn main() -> ExitCode {
         }
     };
     if let Some(p) = &args.summarize {
-        return match summarize(p) {
+        return match summarize(p, args.seeds.as_deref()) {
             Ok(table) => {
                 print!("{table}");
                 ExitCode::SUCCESS
