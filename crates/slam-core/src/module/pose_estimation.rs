@@ -199,6 +199,14 @@ pub fn mcor_frame_gate_with(
     (index, outcome)
 }
 
+/// The exact bits of a pose (translation, then quaternion), to tell whether two poses are
+/// the same number for number.
+fn pose_bits(t: &Isometry3<f64>) -> [u64; 7] {
+    let v = t.translation.vector;
+    let q = t.rotation.coords;
+    [v.x, v.y, v.z, q.x, q.y, q.z, q.w].map(f64::to_bits)
+}
+
 /// Keypoints on the same moving body as a match the rigid consensus rejected: within
 /// `mask_radius_px` of a rejected keypoint with depth and within `mask_depth_m` of its depth.
 /// They create no map points when the frame becomes a keyframe, so that walkers who fill the
@@ -483,14 +491,21 @@ pub fn optimize_frame_pose(
     // first `veto_rounds` rounds. Returned with MC-OR's outcome of its last round (rejected
     // clusters and features, and the verdicts when tapped), so that the counts reported are
     // those of the solution kept.
+    // The pose the virtual cameras were last aimed from: the residuals were built aimed from
+    // `initial`, so the first round from `initial` need not aim them again (the same
+    // operations on the same bits).
+    let aimed_from = std::cell::Cell::new(Some(pose_bits(&initial)));
     let optimize = |start: &Isometry3<f64>, veto: Option<&[bool]>| {
         let mut last_gate = (0, 0);
         let mut last_verdicts: Option<Vec<McorVerdict>> = None;
         // Hook point 2, before every round with the latest pose: re-aim the virtual cameras,
         // then re-run MC-OR (an observation rejected at a poor early pose may come back).
         let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
-            for (k, r) in &avc {
-                r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
+            if aimed_from.get() != Some(pose_bits(pose)) {
+                for (k, r) in &avc {
+                    r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
+                }
+                aimed_from.set(Some(pose_bits(pose)));
             }
             if let Some(out) = veto {
                 if round < rc_veto_rounds {
