@@ -182,8 +182,17 @@ fn main() -> ExitCode {
         };
     }
     let targets = fuzz::targets::all();
+    let status = with_targets(&args, &targets);
+    // Every way out of a run, a listing or a replay leaves no scratch folder behind (the
+    // targets make theirs, and their seeds', when built).
+    fuzz::targets::remove_scratch();
+    status
+}
+
+/// Lists, replays or runs the targets `args` name.
+fn with_targets(args: &Args, targets: &[fuzz::Target]) -> ExitCode {
     if args.list {
-        for t in &targets {
+        for t in targets {
             println!("{:<20} {}", t.name, t.about);
         }
         return ExitCode::SUCCESS;
@@ -219,7 +228,6 @@ fn main() -> ExitCode {
             println!("{}", r.summary());
             clean &= r.broken.is_empty();
         }
-        fuzz::targets::remove_scratch();
         return if clean {
             ExitCode::SUCCESS
         } else {
@@ -246,7 +254,6 @@ fn main() -> ExitCode {
         }
         reports.push(r);
     }
-    fuzz::targets::remove_scratch();
     if reports.iter().all(Report::clean) {
         ExitCode::SUCCESS
     } else {
