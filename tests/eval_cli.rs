@@ -61,6 +61,20 @@ fn human_summary_and_rpe() {
 }
 
 #[test]
+fn rpe_without_a_sample_names_both_files() {
+    let out = noisefree(&[
+        "eval",
+        &fixture("gt.txt"),
+        &fixture("est.txt"),
+        "--rpe-frames",
+        "100000",
+    ]);
+    assert_clean_failure(&out, "relative pose error of");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("est.txt") && err.contains("gt.txt"), "{err}");
+}
+
+#[test]
 fn missing_file_is_a_clean_error() {
     let out = noisefree(&["eval", "/no/such/gt.txt", &fixture("est.txt")]);
     assert_clean_failure(&out, "/no/such/gt.txt");

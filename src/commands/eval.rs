@@ -156,21 +156,22 @@ pub fn run(args: EvalArgs) -> Result<()> {
             args.gt.display()
         )
     })?;
-    let rpe = match (args.rpe_frames, args.rpe_seconds) {
-        (Some(n), _) => Some(evaluate_rpe(
-            &gt.trajectory,
-            &est_traj,
-            RpeDelta::Frames(n),
-            &opts,
-        )?),
-        (None, Some(s)) => Some(evaluate_rpe(
-            &gt.trajectory,
-            &est_traj,
-            RpeDelta::Seconds(s),
-            &opts,
-        )?),
+    let delta = match (args.rpe_frames, args.rpe_seconds) {
+        (Some(n), _) => Some(RpeDelta::Frames(n)),
+        (None, Some(s)) => Some(RpeDelta::Seconds(s)),
         _ => None,
     };
+    let rpe = delta
+        .map(|d| {
+            evaluate_rpe(&gt.trajectory, &est_traj, d, &opts).with_context(|| {
+                format!(
+                    "relative pose error of {} against {}",
+                    args.est.display(),
+                    args.gt.display()
+                )
+            })
+        })
+        .transpose()?;
     if let Some(out) = &args.save_aligned {
         let aligned = est_traj.transformed(ate.alignment.scale, &ate.alignment.rt);
         io::write_tum(out, &aligned)?;
