@@ -33,16 +33,12 @@ pub struct LevelStats {
 impl LevelStats {
     /// Mean ATE of the runs that did not fail.
     pub fn mean(&self) -> Option<f64> {
-        (!self.ates.is_empty()).then(|| self.ates.iter().sum::<f64>() / self.ates.len() as f64)
+        crate::tables::mean_std(&self.ates).map(|(m, _)| m)
     }
 
     /// Population standard deviation of those ATEs.
     pub fn std(&self) -> Option<f64> {
-        let m = self.mean()?;
-        Some(
-            (self.ates.iter().map(|a| (a - m).powi(2)).sum::<f64>() / self.ates.len() as f64)
-                .sqrt(),
-        )
+        crate::tables::mean_std(&self.ates).map(|(_, s)| s)
     }
 
     /// Median of those ATEs.

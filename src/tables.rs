@@ -33,6 +33,20 @@ pub struct Cell {
     pub fps: f64,
 }
 
+/// Mean and population standard deviation of `values` (summed in their order), `None` when
+/// empty: the statistics of every table's cells.
+pub fn mean_std(values: &[f64]) -> Option<(f64, f64)> {
+    if values.is_empty() {
+        return None;
+    }
+    let n = values.len() as f64;
+    let m = values.iter().sum::<f64>() / n;
+    Some((
+        m,
+        (values.iter().map(|a| (a - m) * (a - m)).sum::<f64>() / n).sqrt(),
+    ))
+}
+
 impl Cell {
     /// Aggregates runs. The cell is a failure ('F') when more than half of its runs failed.
     pub fn of(runs: &[&RunRecord]) -> Cell {
@@ -42,15 +56,9 @@ impl Cell {
             .filter_map(|r| r.ate_rmse)
             .collect();
         let failed = runs.iter().filter(|r| r.failed).count();
-        let (mean, std) = if ok.is_empty() {
-            (None, None)
-        } else {
-            let n = ok.len() as f64;
-            let m = ok.iter().sum::<f64>() / n;
-            (
-                Some(m),
-                Some((ok.iter().map(|a| (a - m) * (a - m)).sum::<f64>() / n).sqrt()),
-            )
+        let (mean, std) = match mean_std(&ok) {
+            Some((m, s)) => (Some(m), Some(s)),
+            None => (None, None),
         };
         let fps = runs.iter().map(|r| r.fps).sum::<f64>() / runs.len().max(1) as f64;
         Cell {
