@@ -74,10 +74,11 @@ impl NoiseKey {
         )
     }
 
-    /// One standard normal draw for item `i`.
+    /// One standard normal draw for item `i` (the first of [`NoiseKey::normal2`]).
     #[inline]
     pub fn normal(&self, i: u64) -> f64 {
-        self.normal2(i).0
+        let r = self.bits(i);
+        inverse_normal_cdf(((r >> 32) as f64 + 0.5) * (1.0 / 4_294_967_296.0))
     }
 }
 

@@ -209,16 +209,19 @@ fn grey_level(v: f64) -> u8 {
 
 /// Adds Gaussian grey-level noise (sigma in grey levels) to linear colour and rounds to RGB8.
 pub fn noisy_rgb8(colour: &[[f32; 3]], sigma: f64, key: NoiseKey) -> Vec<u8> {
-    colour
-        .par_iter()
+    let mut out = vec![0u8; 3 * colour.len()];
+    out.par_chunks_mut(3)
+        .zip(colour.par_iter())
         .enumerate()
-        .flat_map_iter(|(i, c)| {
+        .for_each(|(i, (o, c))| {
             let (n0, n1) = key.normal2(2 * i as u64);
             let n2 = key.normal(2 * i as u64 + 1);
             let n = [n0, n1, n2];
-            (0..3).map(move |k| grey_level(c[k] as f64 + sigma * n[k]))
-        })
-        .collect()
+            for k in 0..3 {
+                o[k] = grey_level(c[k] as f64 + sigma * n[k]);
+            }
+        });
+    out
 }
 
 /// The photometric chain of a real sensor, for [`exposed_rgb8`] and [`exposed_gray8`]: radiance
@@ -267,20 +270,21 @@ impl Photometry<'_> {
 /// [`noisy_rgb8`] through a real sensor's photometric chain ([`Photometry`]); the random
 /// numbers are drawn exactly as [`noisy_rgb8`] draws them.
 pub fn exposed_rgb8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec<u8> {
-    colour
-        .par_iter()
+    let mut out = vec![0u8; 3 * colour.len()];
+    out.par_chunks_mut(3)
+        .zip(colour.par_iter())
         .enumerate()
-        .flat_map_iter(|(i, c)| {
+        .for_each(|(i, (o, c))| {
             let (n0, n1) = key.normal2(2 * i as u64);
             let n2 = key.normal(2 * i as u64 + 1);
             let n = [n0, n1, n2];
             let vig = ph.vignetting_at(i);
-            (0..3).map(move |k| {
+            for k in 0..3 {
                 let (level, sigma) = ph.level(c[k] as f64, vig);
-                grey_level(level + sigma * n[k])
-            })
-        })
-        .collect()
+                o[k] = grey_level(level + sigma * n[k]);
+            }
+        });
+    out
 }
 
 /// [`noisy_gray8`] through a real sensor's photometric chain ([`Photometry`]).

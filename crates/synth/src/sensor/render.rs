@@ -9,7 +9,7 @@ use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use slam_core::{Camera, Distortion};
 
-use crate::world::scene::{Placed, Scene, OCCLUDER_ID};
+use crate::world::scene::{Placed, Scene, Seen, OCCLUDER_ID};
 
 /// How many rays are averaged for a pixel's colour (depth always comes from the pixel centre).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,6 +89,7 @@ pub struct View<'a> {
     pub occluded: bool,
 }
 
+#[derive(Clone, Copy, Default)]
 struct Sample {
     t: f32,
     cos: f32,
@@ -97,37 +98,41 @@ struct Sample {
 }
 
 impl View<'_> {
-    /// Casts the ray through raw pixel coordinates (u, v) — through the lens distortion when
-    /// the camera has one — and shades it when `shade`.
+    /// The camera-frame direction (z = 1) of the ray through raw pixel coordinates (u, v),
+    /// through the lens distortion when the camera has one.
     #[inline]
-    fn cast(
-        &self,
-        placed: &[Placed],
-        rays: Option<&RayTable>,
-        u: f64,
-        v: f64,
-        shade: Option<&Shading>,
-    ) -> Sample {
+    fn ray_camera(&self, rays: Option<&RayTable>, u: f64, v: f64) -> Vector3<f64> {
         let c = self.camera;
-        let dc = match rays {
+        match rays {
             None => Vector3::new((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0),
             Some(r) => {
                 let (x, y) = r.ray(c, u, v);
                 Vector3::new(x, y, 1.0)
             }
-        };
-        if self.occluded {
+        }
+    }
+
+    /// Casts the ray of camera-frame direction `dc` (world direction `d`, `None` when the
+    /// occluder covers the lens) and shades it when `shade`.
+    #[inline]
+    fn cast(
+        &self,
+        seen: &[Seen],
+        dc: &Vector3<f64>,
+        d: Option<&Vector3<f64>>,
+        shade: Option<&Shading>,
+    ) -> Sample {
+        let Some(d) = d else {
             return Sample {
                 t: OCCLUDER_DEPTH,
                 cos: (1.0 / dc.norm()) as f32,
                 id: OCCLUDER_ID,
                 colour: [OCCLUDER_GREY; 3],
             };
-        }
+        };
         let o = self.pose_wc.translation.vector;
-        let d = self.pose_wc.rotation * dc;
-        let hit = self.scene.intersect(placed, &o, &d);
-        let cos = (-hit.normal.dot(&d) / d.norm()).clamp(0.0, 1.0);
+        let hit = self.scene.intersect_seen(seen, &o, d);
+        let cos = (-hit.normal.dot(d) / d.norm()).clamp(0.0, 1.0);
         let colour = match shade {
             Some(s) => {
                 let p = o + d * hit.t;
@@ -204,38 +209,69 @@ impl View<'_> {
             .collect()
     }
 
-    /// Casts `n` rays at (x0 + k, y), k = 0..n, testing per 16-ray segment only the objects
-    /// whose image bounds overlap it.
+    /// The placed objects as the view's rays meet them ([`Scene::seen_from`]).
+    fn seen(&self) -> Vec<Seen> {
+        let o = self.pose_wc.translation.vector;
+        self.placed
+            .iter()
+            .map(|p| self.scene.seen_from(p, &o))
+            .collect()
+    }
+
+    /// Casts `n` rays at (x0 + k, y), k = 0..n, and hands each sample to `emit(k, sample)` in
+    /// order, testing per 16-ray segment only the objects whose image bounds overlap it and
+    /// whose bounding sphere the segment's cone of rays reaches ([`RayCone`]): the objects
+    /// left out are those every ray of the segment misses by a wide margin, so each ray finds
+    /// the hit it would find testing every object. `seen` is [`View::seen`].
+    #[allow(clippy::too_many_arguments)]
     fn row(
         &self,
+        seen: &[Seen],
         bounds: &[[f64; 4]],
         x0: f64,
         y: f64,
         n: usize,
         shade: Option<&Shading>,
-    ) -> Vec<Sample> {
-        let row_objs: Vec<usize> = (0..self.placed.len())
+        mut emit: impl FnMut(usize, Sample),
+    ) {
+        const SEG: usize = 16;
+        let row_objs: Vec<usize> = (0..bounds.len())
             .filter(|&i| bounds[i][2] <= y && y <= bounds[i][3])
             .collect();
         let rays = self.camera.distortion.map(|_| ray_table(self.camera));
         let rays = rays.as_deref();
-        let mut seg: Vec<Placed> = Vec::with_capacity(row_objs.len());
-        let mut out = Vec::with_capacity(n);
-        const SEG: usize = 16;
+        let mut seg: Vec<Seen> = Vec::with_capacity(row_objs.len());
+        let mut dirs = [(Vector3::zeros(), Vector3::zeros()); SEG];
         for s in (0..n).step_by(SEG) {
-            let (xa, xb) = (x0 + s as f64, x0 + (s + SEG - 1).min(n - 1) as f64);
+            let m = SEG.min(n - s);
+            let (xa, xb) = (x0 + s as f64, x0 + (s + m - 1) as f64);
+            for (j, dir) in dirs.iter_mut().enumerate().take(m) {
+                let dc = self.ray_camera(rays, x0 + (s + j) as f64, y);
+                *dir = (dc, self.pose_wc.rotation * dc);
+            }
+            let dirs = &dirs[..m];
+            if self.occluded {
+                for (j, (dc, _)) in dirs.iter().enumerate() {
+                    emit(s + j, self.cast(&[], dc, None, shade));
+                }
+                continue;
+            }
             seg.clear();
-            seg.extend(
-                row_objs
-                    .iter()
-                    .filter(|&&i| bounds[i][0] <= xb && xa <= bounds[i][1])
-                    .map(|&i| self.placed[i]),
-            );
-            for k in s..(s + SEG).min(n) {
-                out.push(self.cast(&seg, rays, x0 + k as f64, y, shade));
+            let mut cone = None;
+            for &i in &row_objs {
+                let b = &bounds[i];
+                if !(b[0] <= xb && xa <= b[1]) {
+                    continue;
+                }
+                let cone = cone.get_or_insert_with(|| RayCone::of(dirs.iter().map(|(_, d)| d)));
+                if cone.may_reach(&seen[i]) {
+                    seg.push(seen[i]);
+                }
+            }
+            for (j, (dc, d)) in dirs.iter().enumerate() {
+                emit(s + j, self.cast(&seg, dc, Some(d), shade));
             }
         }
-        out
     }
 
     /// Renders the view; colour only when `shading` is given.
@@ -244,68 +280,139 @@ impl View<'_> {
         let sh = shading.as_ref();
         let bounds = self.screen_bounds();
         let b = &bounds;
+        let seen = self.seen();
+        let seen = &seen;
         // Pixel-centre rays: depth, incidence, id, and the centre colour sample.
-        let centre: Vec<Sample> = (0..h)
-            .into_par_iter()
-            .flat_map_iter(|v| self.row(b, 0.0, v as f64, w, sh))
-            .collect();
+        let mut depth = vec![0.0f32; w * h];
+        let mut cos_incidence = vec![0.0f32; w * h];
+        let mut ids = vec![0u16; w * h];
+        let mut centre_colour = vec![[0.0f32; 3]; if sh.is_some() { w * h } else { 0 }];
+        let colour_rows: Vec<&mut [[f32; 3]]> = if sh.is_some() {
+            centre_colour.chunks_mut(w).collect()
+        } else {
+            (0..h).map(|_| Default::default()).collect()
+        };
+        depth
+            .par_chunks_mut(w)
+            .zip(cos_incidence.par_chunks_mut(w))
+            .zip(ids.par_chunks_mut(w))
+            .zip(colour_rows)
+            .enumerate()
+            .for_each(|(v, (((dr, cr), ir), colr))| {
+                self.row(seen, b, 0.0, v as f64, w, sh, |k, s| {
+                    dr[k] = s.t;
+                    cr[k] = s.cos;
+                    ir[k] = s.id;
+                    if let Some(c) = colr.get_mut(k) {
+                        *c = s.colour;
+                    }
+                });
+            });
         let colour = shading.map(|s| match s.supersampling {
-            Supersampling::None => centre.iter().map(|c| c.colour).collect(),
+            Supersampling::None => centre_colour,
             Supersampling::Quincunx => {
-                let corners: Vec<[f32; 3]> = (0..=h)
-                    .into_par_iter()
-                    .flat_map_iter(|v| {
-                        self.row(b, -0.5, v as f64 - 0.5, w + 1, sh)
-                            .into_iter()
-                            .map(|s| s.colour)
-                    })
-                    .collect();
-                (0..h)
-                    .into_par_iter()
-                    .flat_map_iter(|v| (0..w).map(move |u| (u, v)))
-                    .map(|(u, v)| {
-                        let c = centre[v * w + u].colour;
-                        let k = |x: usize, y: usize| corners[y * (w + 1) + x];
+                let mut corners = vec![[0.0f32; 3]; (w + 1) * (h + 1)];
+                corners
+                    .par_chunks_mut(w + 1)
+                    .enumerate()
+                    .for_each(|(v, row)| {
+                        self.row(seen, b, -0.5, v as f64 - 0.5, w + 1, sh, |k, s| {
+                            row[k] = s.colour
+                        });
+                    });
+                let mut out = vec![[0.0f32; 3]; w * h];
+                out.par_chunks_mut(w).enumerate().for_each(|(v, row)| {
+                    let k = |x: usize, y: usize| corners[y * (w + 1) + x];
+                    for (u, o) in row.iter_mut().enumerate() {
+                        let c = centre_colour[v * w + u];
                         let (a, b, cc, d) = (k(u, v), k(u + 1, v), k(u, v + 1), k(u + 1, v + 1));
-                        let mut out = [0.0; 3];
                         for i in 0..3 {
-                            out[i] = 0.5 * c[i] + 0.125 * (a[i] + b[i] + cc[i] + d[i]);
+                            o[i] = 0.5 * c[i] + 0.125 * (a[i] + b[i] + cc[i] + d[i]);
                         }
-                        out
-                    })
-                    .collect()
+                    }
+                });
+                out
             }
             Supersampling::Grid(n) => {
                 let n = n.max(1) as usize;
                 let inv = 1.0 / (n * n) as f32;
                 let off = |i: usize| (i as f64 + 0.5) / n as f64 - 0.5;
-                (0..h)
-                    .into_par_iter()
-                    .flat_map_iter(|v| {
-                        let mut acc = vec![[0.0f32; 3]; w];
-                        for j in 0..n {
-                            for i in 0..n {
-                                let r = self.row(b, off(i), v as f64 + off(j), w, sh);
-                                for (a, s) in acc.iter_mut().zip(&r) {
-                                    for (ak, ck) in a.iter_mut().zip(s.colour) {
-                                        *ak += ck;
-                                    }
+                let mut out = vec![[0.0f32; 3]; w * h];
+                out.par_chunks_mut(w).enumerate().for_each(|(v, acc)| {
+                    for j in 0..n {
+                        for i in 0..n {
+                            self.row(seen, b, off(i), v as f64 + off(j), w, sh, |k, s| {
+                                for (ak, ck) in acc[k].iter_mut().zip(s.colour) {
+                                    *ak += ck;
                                 }
-                            }
+                            });
                         }
-                        acc.into_iter().map(move |a| a.map(|x| x * inv))
-                    })
-                    .collect()
+                    }
+                    for a in acc.iter_mut() {
+                        *a = a.map(|x| x * inv);
+                    }
+                });
+                out
             }
         });
         RenderOutput {
             width: w,
             height: h,
-            depth: centre.iter().map(|s| s.t).collect(),
-            cos_incidence: centre.iter().map(|s| s.cos).collect(),
-            ids: centre.iter().map(|s| s.id).collect(),
+            depth,
+            cos_incidence,
+            ids,
             colour,
         }
+    }
+}
+
+/// A cone from the camera centre holding a set of rays: its unit axis and the cosine and
+/// sine of its half-angle, widened by a margin far beyond the rounding of any of the
+/// arithmetic involved.
+struct RayCone {
+    axis: Vector3<f64>,
+    cos: f64,
+    sin: f64,
+}
+
+/// Margin (on cosines) of [`RayCone`]'s tests: 1e-7, against roundings of about 1e-15.
+const CONE_MARGIN: f64 = 1e-7;
+
+impl RayCone {
+    /// The cone around the mean direction of `dirs` (not zero) holding them all.
+    fn of<'a>(dirs: impl Iterator<Item = &'a Vector3<f64>> + Clone) -> RayCone {
+        let mut sum = Vector3::zeros();
+        for d in dirs.clone() {
+            sum += d / d.norm();
+        }
+        let axis = sum / sum.norm();
+        let cos = dirs.map(|d| axis.dot(d) / d.norm()).fold(1.0f64, f64::min) - CONE_MARGIN;
+        let cos = cos.max(-1.0);
+        RayCone {
+            axis,
+            cos,
+            sin: (1.0 - cos * cos).max(0.0).sqrt(),
+        }
+    }
+
+    /// Whether a ray of the cone may come near the bounding sphere of `seen` (centre `v`
+    /// relative to the camera centre, radius r): `false` only when the angle between the axis and `v`
+    /// exceeds the cone's half-angle plus the sphere's angular radius by the margin, so that
+    /// every ray of the cone (a half-line) misses the sphere by far more than rounding.
+    #[inline]
+    fn may_reach(&self, seen: &Seen) -> bool {
+        let (v, l2) = (seen.oc(), seen.oc2());
+        let r_safe = seen.placed().radius * (1.0 + 1e-6) + 1e-9;
+        if l2 <= r_safe * r_safe {
+            return true;
+        }
+        let l = l2.sqrt();
+        let sin_phi = r_safe / l;
+        let cos_phi = (1.0 - sin_phi * sin_phi).max(0.0).sqrt();
+        // cos(theta + phi): the smallest cosine to the axis of a direction within the sphere's
+        // angular radius of a ray of the cone.
+        let cos_limit = self.cos * cos_phi - self.sin * sin_phi;
+        self.axis.dot(v) / l >= cos_limit - CONE_MARGIN
     }
 }
 
@@ -534,32 +641,40 @@ impl Exposed<'_> {
         let inv = 1.0 / n as f32;
         let bounds = self.frame_bounds();
         let b = &bounds;
-        (0..h)
-            .into_par_iter()
-            .flat_map_iter(|v| {
-                let t_row = self.time + row_time(v as f64, h, self.readout_s);
-                let mut acc = vec![[0.0f32; 3]; w];
-                for k in 0..n {
-                    let t = t_row + sample_time(k, n, self.exposure_s);
-                    let placed = self.scene.place(t);
-                    let view = View {
-                        scene: self.scene,
-                        placed: &placed,
-                        camera: self.camera,
-                        pose_wc: (self.pose_at)(t),
-                        occluded: self.occluded,
-                    };
-                    let (dx, dy) = sample_offset(k, n);
-                    let r = view.row(b, dx, v as f64 + dy, w, Some(&self.shading));
-                    for (a, s) in acc.iter_mut().zip(&r) {
-                        for (ak, ck) in a.iter_mut().zip(s.colour) {
+        let mut out = vec![[0.0f32; 3]; w * h];
+        out.par_chunks_mut(w).enumerate().for_each(|(v, acc)| {
+            let t_row = self.time + row_time(v as f64, h, self.readout_s);
+            for k in 0..n {
+                let t = t_row + sample_time(k, n, self.exposure_s);
+                let placed = self.scene.place(t);
+                let view = View {
+                    scene: self.scene,
+                    placed: &placed,
+                    camera: self.camera,
+                    pose_wc: (self.pose_at)(t),
+                    occluded: self.occluded,
+                };
+                let seen = view.seen();
+                let (dx, dy) = sample_offset(k, n);
+                view.row(
+                    &seen,
+                    b,
+                    dx,
+                    v as f64 + dy,
+                    w,
+                    Some(&self.shading),
+                    |u, s| {
+                        for (ak, ck) in acc[u].iter_mut().zip(s.colour) {
                             *ak += ck;
                         }
-                    }
-                }
-                acc.into_iter().map(move |a| a.map(|x| x * inv))
-            })
-            .collect()
+                    },
+                );
+            }
+            for a in acc.iter_mut() {
+                *a = a.map(|x| x * inv);
+            }
+        });
+        out
     }
 
     /// Image bounds of each object valid over the whole frame (all rows, the whole exposure):

@@ -128,6 +128,40 @@ impl Placed {
     }
 }
 
+/// A placed object as seen from a camera centre ([`Scene::seen_from`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Seen {
+    placed: Placed,
+    /// Centre minus camera centre.
+    oc: Vector3<f64>,
+    /// `oc . oc`.
+    oc2: f64,
+    /// Bounding radius squared.
+    r2: f64,
+    /// The camera centre in the object's local frame.
+    lo: Vector3<f64>,
+    /// Cuboid: per axis, the faces' offsets from `lo` (-half - lo, half - lo). Cylinder:
+    /// [lo.x^2 + lo.y^2 - r^2, _], [hh - lo.z, -hh - lo.z].
+    slabs: [[f64; 2]; 3],
+}
+
+impl Seen {
+    /// The placed object.
+    pub fn placed(&self) -> &Placed {
+        &self.placed
+    }
+
+    /// Its centre relative to the camera centre.
+    pub fn oc(&self) -> &Vector3<f64> {
+        &self.oc
+    }
+
+    /// Squared distance of its centre from the camera centre.
+    pub fn oc2(&self) -> f64 {
+        self.oc2
+    }
+}
+
 /// Result of a ray hit.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
@@ -381,31 +415,68 @@ impl Scene {
     }
 
     /// Nearest hit of the ray o + t d (t > 0) with the room and the placed objects.
-    #[inline]
     pub fn intersect(&self, placed: &[Placed], o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
+        let seen: Vec<Seen> = placed.iter().map(|p| self.seen_from(p, o)).collect();
+        self.intersect_seen(&seen, o, d)
+    }
+
+    /// `p` as the rays from camera centre `o` meet it: what their tests need that depends on
+    /// the object and `o` only, computed once per view.
+    pub fn seen_from(&self, p: &Placed, o: &Vector3<f64>) -> Seen {
+        let oc = p.centre - o;
+        // Into the local frame: translate, then rotate by -yaw about z (and -pitch).
+        let lo = p.world_to_local(&-oc);
+        let obj = &self.objects[p.object];
+        let slabs = match obj.shape {
+            Shape::Cuboid { half } => [
+                [-half[0] - lo[0], half[0] - lo[0]],
+                [-half[1] - lo[1], half[1] - lo[1]],
+                [-half[2] - lo[2], half[2] - lo[2]],
+            ],
+            Shape::Cylinder {
+                radius,
+                half_height,
+            } => [
+                [lo.x * lo.x + lo.y * lo.y - radius * radius, 0.0],
+                [half_height - lo.z, -half_height - lo.z],
+                [0.0; 2],
+            ],
+        };
+        Seen {
+            placed: *p,
+            oc,
+            oc2: oc.dot(&oc),
+            r2: p.radius * p.radius,
+            lo,
+            slabs,
+        }
+    }
+
+    /// [`Scene::intersect`] of objects prepared by [`Scene::seen_from`] for camera centre `o`:
+    /// the same arithmetic on the same values, the ray-independent part done once.
+    #[inline]
+    pub fn intersect_seen(&self, seen: &[Seen], o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
         let mut best = room_hit(&self.room, o, d);
         let dd = d.dot(d);
         let inv_len = 1.0 / dd.sqrt();
-        for p in placed {
-            let oc = p.centre - o;
-            let tca = oc.dot(d) / dd;
-            let dist2 = oc.dot(&oc) - tca * tca * dd;
-            if dist2 > p.radius * p.radius || tca + p.radius * inv_len < 0.0 {
+        for s in seen {
+            let p = &s.placed;
+            let tca = s.oc.dot(d) / dd;
+            let dist2 = s.oc2 - tca * tca * dd;
+            if dist2 > s.r2 || tca + p.radius * inv_len < 0.0 {
                 continue;
             }
             if tca - p.radius * inv_len > best.t {
                 continue;
             }
             let obj = &self.objects[p.object];
-            // Into the local frame: translate, then rotate by -yaw about z (and -pitch).
-            let lo = p.world_to_local(&-oc);
             let ld = p.world_to_local(d);
             let local = match obj.shape {
-                Shape::Cuboid { half } => hit_cuboid(&lo, &ld, &half),
+                Shape::Cuboid { half } => hit_cuboid(&s.lo, &ld, &half, &s.slabs),
                 Shape::Cylinder {
                     radius,
                     half_height,
-                } => hit_cylinder(&lo, &ld, radius, half_height),
+                } => hit_cylinder(&s.lo, &ld, radius, half_height, &s.slabs),
             };
             if let Some((t, n, st)) = local {
                 if t < best.t {
@@ -487,11 +558,13 @@ fn room_hit(room: &RoomBox, o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
 }
 
 /// Ray / box slab test in the box's local frame; entry hit only (the camera is never inside).
+/// `slabs[a]` = (-half[a] - o[a], half[a] - o[a]).
 #[inline]
 fn hit_cuboid(
     o: &Vector3<f64>,
     d: &Vector3<f64>,
     half: &[f64; 3],
+    slabs: &[[f64; 2]; 3],
 ) -> Option<(f64, Vector3<f64>, (f64, f64))> {
     let mut t_near = f64::NEG_INFINITY;
     let mut t_far = f64::INFINITY;
@@ -504,8 +577,8 @@ fn hit_cuboid(
             continue;
         }
         let inv = 1.0 / d[a];
-        let mut t0 = (-half[a] - o[a]) * inv;
-        let mut t1 = (half[a] - o[a]) * inv;
+        let mut t0 = slabs[a][0] * inv;
+        let mut t1 = slabs[a][1] * inv;
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
         }
@@ -534,17 +607,19 @@ fn hit_cuboid(
 
 /// Ray / vertical cylinder (with caps) in the cylinder's local frame.
 #[inline]
+/// `slabs[0][0]` = o.x^2 + o.y^2 - r^2; `slabs[1]` = (hh - o.z, -hh - o.z).
 fn hit_cylinder(
     o: &Vector3<f64>,
     d: &Vector3<f64>,
     r: f64,
     hh: f64,
+    slabs: &[[f64; 2]; 3],
 ) -> Option<(f64, Vector3<f64>, (f64, f64))> {
     let mut best: Option<(f64, Vector3<f64>, (f64, f64))> = None;
     let a = d.x * d.x + d.y * d.y;
     if a > 1e-15 {
         let b = o.x * d.x + o.y * d.y;
-        let c = o.x * o.x + o.y * o.y - r * r;
+        let c = slabs[0][0];
         let disc = b * b - a * c;
         if disc >= 0.0 {
             let t = (-b - disc.sqrt()) / a;
@@ -562,8 +637,12 @@ fn hit_cylinder(
         }
     }
     if d.z.abs() > 1e-15 {
-        let zc = if d.z < 0.0 { hh } else { -hh };
-        let t = (zc - o.z) / d.z;
+        let (zc, dz) = if d.z < 0.0 {
+            (hh, slabs[1][0])
+        } else {
+            (-hh, slabs[1][1])
+        };
+        let t = dz / d.z;
         if t > 1e-9 && best.is_none_or(|b| t < b.0) {
             let p = o + d * t;
             if p.x * p.x + p.y * p.y <= r * r {

@@ -380,12 +380,12 @@ impl Texture {
     pub fn sample(&self, s: f64, t: f64) -> [f32; 3] {
         let x = s * self.scale - 0.5;
         let y = t * self.scale - 0.5;
-        let xf = x.floor();
-        let yf = y.floor();
+        let xf = floor(x);
+        let yf = floor(y);
         let fx = (x - xf) as f32;
         let fy = (y - yf) as f32;
-        let x0 = (xf as i64).rem_euclid(self.w as i64) as usize;
-        let y0 = (yf as i64).rem_euclid(self.h as i64) as usize;
+        let x0 = wrap(xf as i64, self.w);
+        let y0 = wrap(yf as i64, self.h);
         let x1 = if x0 + 1 == self.w { 0 } else { x0 + 1 };
         let y1 = if y0 + 1 == self.h { 0 } else { y0 + 1 };
         let a = self.data[y0 * self.w + x0];
@@ -549,11 +549,20 @@ impl Texture {
         let s = self.scale;
         let (tx0, tx1) = ((x0 * s - 0.5).ceil() as i64, (x1 * s - 0.5).ceil() as i64);
         let (ty0, ty1) = ((y0 * s - 0.5).ceil() as i64, (y1 * s - 0.5).ceil() as i64);
+        if tx0 >= tx1 {
+            return;
+        }
+        let x_start = wrap(tx0, self.w);
         for ty in ty0..ty1 {
-            let y = ty.rem_euclid(self.h as i64) as usize;
-            for tx in tx0..tx1 {
-                let x = tx.rem_euclid(self.w as i64) as usize;
-                self.data[y * self.w + x] = c;
+            let row = wrap(ty, self.h) * self.w;
+            // Texels tx0..tx1 from column x_start on, wrapping at the right edge.
+            let mut x = x_start;
+            for _ in tx0..tx1 {
+                self.data[row + x] = c;
+                x += 1;
+                if x == self.w {
+                    x = 0;
+                }
             }
         }
     }
@@ -582,16 +591,38 @@ impl Texture {
             area += a.0 * b.1 - b.0 * a.1;
         }
         let sign = if area >= 0.0 { 1.0 } else { -1.0 };
+        // Edge i from a to b: the texel centre (px, py) is inside when
+        // sign * ((b.0 - a.0) * (py - a.1) - (b.1 - a.1) * (px - a.0)) >= 0 for every edge.
+        // Per edge: (a.0, b.1 - a.1) and, per row, (b.0 - a.0) * (py - a.1): the same
+        // operations on the same values as evaluating the whole expression per texel.
+        let mut edges = [(0.0, 0.0, 0.0, 0.0); 4];
+        for (i, e) in edges.iter_mut().enumerate().take(n) {
+            let (a, b) = (p[i], p[(i + 1) % n]);
+            *e = (a.0, a.1, b.0 - a.0, b.1 - a.1);
+        }
+        let edges = &edges[..n];
+        let (tx0, tx1) = (x0.floor() as i64, x1.ceil() as i64);
         for ty in (y0.floor() as i64)..=(y1.ceil() as i64) {
             let py = ty as f64 + 0.5;
-            for tx in (x0.floor() as i64)..=(x1.ceil() as i64) {
+            let mut row = [0.0; 4];
+            for (r, e) in row.iter_mut().zip(edges) {
+                *r = e.2 * (py - e.1);
+            }
+            let row = &row[..n];
+            let y = wrap(ty, self.h) * self.w;
+            let mut x = wrap(tx0, self.w);
+            for tx in tx0..=tx1 {
                 let px = tx as f64 + 0.5;
-                let inside = (0..n).all(|i| {
-                    let (a, b) = (p[i], p[(i + 1) % n]);
-                    sign * ((b.0 - a.0) * (py - a.1) - (b.1 - a.1) * (px - a.0)) >= 0.0
-                });
+                let inside = edges
+                    .iter()
+                    .zip(row)
+                    .all(|(e, r)| sign * (r - e.3 * (px - e.0)) >= 0.0);
                 if inside {
-                    self.put(tx, ty, c);
+                    self.data[y + x] = c;
+                }
+                x += 1;
+                if x == self.w {
+                    x = 0;
                 }
             }
         }
@@ -613,9 +644,32 @@ impl Texture {
 
     #[inline]
     fn put(&mut self, x: i64, y: i64, c: [u8; 3]) {
-        let x = x.rem_euclid(self.w as i64) as usize;
-        let y = y.rem_euclid(self.h as i64) as usize;
+        let x = wrap(x, self.w);
+        let y = wrap(y, self.h);
         self.data[y * self.w + x] = c;
+    }
+}
+
+/// `x.floor()` for the texture coordinates of [`Texture::sample`] (|x| < 2^52), inline:
+/// `f64::floor` is a libm call on baseline x86-64. (-0.0 gives 0.0, which changes no sample:
+/// only the sign of a zero interpolation weight.)
+#[inline]
+fn floor(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+/// `i` wrapped into 0..n (`i.rem_euclid(n)`), without the division when it is already there.
+#[inline]
+fn wrap(i: i64, n: usize) -> usize {
+    if (i as u64) < n as u64 {
+        i as usize
+    } else {
+        i.rem_euclid(n as i64) as usize
     }
 }
 
