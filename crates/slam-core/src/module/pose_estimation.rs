@@ -34,7 +34,7 @@ use crate::techniques::rigid_consensus::{
     nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
 };
 use crate::techniques::{
-    ClusterFeature, McorCluster, McorOutcome, McorVerdict, VirtualCameraResidual,
+    ClusterFeature, McorCluster, McorOutcome, McorVerdict, VirtualCameraRef, VirtualCameraResidual,
 };
 
 /// `t` with its rotation quaternion renormalised. Products of unit quaternions drift off unit
@@ -75,7 +75,7 @@ pub fn measurement_for(
     estimate: &Vector3<f64>,
 ) -> Measurement {
     if let Some(r) = avc_residual_for(camera, features, i, hooks, estimate) {
-        return Measurement::VirtualCamera(r);
+        return Measurement::VirtualCamera(VirtualCameraRef::single(r));
     }
     let kp = &features.keypoints[i];
     match features.u_right_of(i) {
@@ -98,7 +98,7 @@ fn avc_residual_for(
     i: usize,
     hooks: &NoiseHooks,
     estimate: &Vector3<f64>,
-) -> Option<Arc<VirtualCameraResidual>> {
+) -> Option<VirtualCameraResidual> {
     let avc = hooks.avc?;
     let depth = features.depth_of(i)?;
     let kp = &features.keypoints[i];
@@ -114,7 +114,6 @@ fn avc_residual_for(
         AvcAim::Angle => r,
         aim => r.with_aim(aim, estimate),
     })
-    .map(Arc::new)
 }
 
 /// The MC-OR cluster of map point `mp`: every observing (good) keyframe's keypoint with a
@@ -401,7 +400,9 @@ pub fn optimize_frame_pose(
     };
     let mut obs = Vec::new();
     let mut index = Vec::new();
-    let mut avc = Vec::new();
+    // The AVC residuals, built into one set (one allocation), and the observation of each.
+    let mut avc_residuals = Vec::with_capacity(if hooks.avc.is_some() { frame.len() } else { 0 });
+    let mut avc_at = Vec::new();
     for i in 0..frame.len() {
         let Some(mp) = frame.map_points[i].and_then(|id| map.map_point(id)) else {
             continue;
@@ -410,8 +411,10 @@ pub fn optimize_frame_pose(
         let estimate = (initial * Point3::from(mp.position)).coords;
         let measurement = match avc_residual_for(camera, &frame.features, i, hooks, &estimate) {
             Some(r) => {
-                avc.push((obs.len(), r.clone()));
-                Measurement::VirtualCamera(r)
+                avc_residuals.push(r);
+                avc_at.push(obs.len());
+                // Replaced by the residual's place in the set below.
+                Measurement::Mono { u: 0.0, v: 0.0 }
             }
             None => measurement_for(camera, &frame.features, i, hooks, &estimate),
         };
@@ -421,6 +424,11 @@ pub fn optimize_frame_pose(
             inv_sigma2: levels.inv_sigma2(frame.features.keypoints[i].octave),
         });
         index.push(i);
+    }
+    let avc: Arc<[VirtualCameraResidual]> = avc_residuals.into();
+    for (n, &k) in avc_at.iter().enumerate() {
+        let r = VirtualCameraRef::new(&avc, n).expect("one residual per AVC observation");
+        obs[k].measurement = Measurement::VirtualCamera(r);
     }
     if obs.len() < 3 {
         return PoseOptCounts {
@@ -502,8 +510,8 @@ pub fn optimize_frame_pose(
         // then re-run MC-OR (an observation rejected at a poor early pose may come back).
         let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
             if aimed_from.get() != Some(pose_bits(pose)) {
-                for (k, r) in &avc {
-                    r.aim_at(&(pose * Point3::from(obs[*k].point_world)).coords);
+                for (r, &k) in avc.iter().zip(&avc_at) {
+                    r.aim_at(&(pose * Point3::from(obs[k].point_world)).coords);
                 }
                 aimed_from.set(Some(pose_bits(pose)));
             }

@@ -14,7 +14,7 @@ use std::sync::Arc;
 use nalgebra::{Matrix3, Matrix4x3, Vector3, Vector4};
 
 use super::fixed_mul::transpose_mul;
-use crate::techniques::VirtualCameraResidual;
+use crate::techniques::VirtualCameraRef;
 use crate::Camera;
 
 /// Largest residual dimension the solvers support (the AVC residual is 4-D).
@@ -92,7 +92,7 @@ pub enum Measurement {
     /// The paper's 4-D AVC residual: what [`Measurement::Custom`] would do with it, the same
     /// operations, called directly rather than through a trait object so that the solvers'
     /// loops inline it (AVC's residuals are evaluated millions of times a sequence).
-    VirtualCamera(Arc<VirtualCameraResidual>),
+    VirtualCamera(VirtualCameraRef),
 }
 
 impl Measurement {

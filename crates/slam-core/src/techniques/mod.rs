@@ -25,7 +25,7 @@ pub mod rigid_consensus;
 #[cfg(test)]
 mod test_support;
 
-pub use avc::{avc_measurement, virtual_camera_direction, VirtualCameraResidual};
+pub use avc::{avc_measurement, virtual_camera_direction, VirtualCameraRef, VirtualCameraResidual};
 pub use correlation::{correlation_analysis, error_terms, pearson, CorrelationTable, ErrorTerms};
 pub use mcor::{
     cluster_passes, feature_metrics, feature_passes, mcor_gate, ClusterFeature, ClusterMetrics,
