@@ -140,6 +140,16 @@ impl ExtractedSequence {
         extract_each(frames.len(), |i| frames.read(i), camera, orbs, on_frame)
     }
 
+    /// Extracts the frames of a sequence held in memory (rendered synthetic frames) once with
+    /// each of `orbs`, in parallel over frames: [`extract_all`](Self::extract_all) without a
+    /// reader, which cannot fail.
+    pub fn extract_frames(frames: &[FrameInput], camera: &Camera, orbs: &[OrbConfig]) -> Vec<Self> {
+        match extract_each(frames.len(), |i| Ok(frames[i].clone()), camera, orbs, || {}) {
+            Ok(extracted) => extracted,
+            Err(_) => unreachable!("frames in memory are always readable"),
+        }
+    }
+
     /// Heap bytes of all frames' features.
     pub fn heap_bytes(&self) -> usize {
         self.frames.iter().map(|f| f.features.heap_bytes()).sum()

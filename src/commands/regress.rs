@@ -5,7 +5,7 @@
 use crate::config_file::base_config;
 use crate::regress::cases::{all_cases, Case, Figures, SuiteSequence, SUITE, SUITE_SEED};
 use crate::regress::golden::{self, Golden, GoldenCase, Spread};
-use crate::runner::run_sequence;
+use crate::runner::{run_extracted, run_sequence, ExtractedSequence};
 use anyhow::{bail, Context, Result};
 use datasets::Sequence;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -106,19 +106,31 @@ pub fn run(args: RegressArgs) -> Result<()> {
         .copied()
         .filter(|s| cases.iter().any(|c| c.sequence == *s))
         .collect();
-    let mut sequences: Vec<(SuiteSequence, Sequence)> = Vec::new();
+    // Each sequence rendered and its features extracted once, shared by all its cases' runs
+    // (the same trajectories, bit for bit, as extracting in each run); perturbed reruns change
+    // the camera, so they extract in their runs from the rendered frames.
+    let mut sequences: Vec<(SuiteSequence, Sequence, ExtractedSequence)> = Vec::new();
     for s in needed {
         if !args.quiet {
             eprintln!("rendering {} ({} frames) ...", s.label(), s.frames);
         }
-        sequences.push((s, s.render()?));
+        let mut seq = s.render()?;
+        let orb = base_config(seq.camera.sensor).orb;
+        let extracted = ExtractedSequence::extract_frames(&seq.frames, &seq.camera, &[orb])
+            .pop()
+            .expect("one extraction per ORB setting");
+        if reruns == 0 {
+            // The images are no longer needed: a suite's frames are gigabytes.
+            seq.frames = Vec::new();
+        }
+        sequences.push((s, seq, extracted));
     }
-    let seq_of = |case: &Case| -> &Sequence {
-        &sequences
+    let seq_of = |case: &Case| -> (&Sequence, &ExtractedSequence) {
+        let (_, seq, extracted) = sequences
             .iter()
-            .find(|(s, _)| *s == case.sequence)
-            .expect("every case's sequence was loaded")
-            .1
+            .find(|(s, _, _)| *s == case.sequence)
+            .expect("every case's sequence was loaded");
+        (seq, extracted)
     };
 
     // The built-in vocabulary: a changed vocabulary changes the figures, as it should.
@@ -149,9 +161,14 @@ pub fn run(args: RegressArgs) -> Result<()> {
         jobs.par_iter()
             .map(|&(c, k)| {
                 let case = &cases[c];
-                let seq = perturbed(seq_of(case), k, args.perturbation);
-                let outcome =
-                    run_sequence(&seq, &case_config(&seq, case), vocabulary.as_ref(), |_| {});
+                let (seq, extracted) = seq_of(case);
+                let outcome = if k == 0 {
+                    let config = case_config(seq, case);
+                    run_extracted(seq, extracted, &config, vocabulary.as_ref(), |_| {})
+                } else {
+                    let seq = perturbed(seq, k, args.perturbation);
+                    run_sequence(&seq, &case_config(&seq, case), vocabulary.as_ref(), |_| {})
+                };
                 bar.inc(1);
                 Figures::of(&outcome)
             })
