@@ -24,7 +24,7 @@ use std::sync::Arc;
 use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::mcor_clusters::ClusterCache;
-use super::noise::{AvcAim, AvcParams, ClusterViews, McorParams};
+use super::noise::{AvcParams, ClusterViews, McorParams};
 use crate::camera::Camera;
 use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
@@ -102,18 +102,15 @@ fn avc_residual_for(
     let avc = hooks.avc?;
     let depth = features.depth_of(i)?;
     let kp = &features.keypoints[i];
-    VirtualCameraResidual::new(
+    VirtualCameraResidual::with_aim_from(
         camera,
         kp.x as f64,
         kp.y as f64,
         depth,
         avc.baseline,
+        avc.aim,
         estimate,
     )
-    .map(|r| match avc.aim {
-        AvcAim::Angle => r,
-        aim => r.with_aim(aim, estimate),
-    })
 }
 
 /// The MC-OR cluster of map point `mp`: every observing (good) keyframe's keypoint with a

@@ -109,6 +109,20 @@ impl VirtualCameraResidual {
         baseline: f64,
         estimate: &Vector3<f64>,
     ) -> Option<Self> {
+        Self::with_aim_from(camera, u, v, depth, baseline, AvcAim::Angle, estimate)
+    }
+
+    /// [`new`](Self::new) with the virtual camera placed by `aim` from the start (aimed once,
+    /// not first by the angle and then again).
+    pub fn with_aim_from(
+        camera: &Camera,
+        u: f64,
+        v: f64,
+        depth: f64,
+        baseline: f64,
+        aim: AvcAim,
+        estimate: &Vector3<f64>,
+    ) -> Option<Self> {
         if !(depth > 0.0 && depth.is_finite() && baseline > 0.0 && baseline.is_finite()) {
             return None;
         }
@@ -119,7 +133,7 @@ impl VirtualCameraResidual {
             measured_point,
             range: measured_point.norm(),
             inv_range: 1.0 / measured_point.norm(),
-            aim: AvcAim::Angle,
+            aim,
             baseline,
             centre_bits: [AtomicU64::new(0), AtomicU64::new(0)],
         };
@@ -293,8 +307,7 @@ pub fn avc_measurement(
     params: &AvcParams,
     estimate: &Vector3<f64>,
 ) -> Option<Measurement> {
-    VirtualCameraResidual::new(camera, u, v, depth, params.baseline, estimate)
-        .map(|r| r.with_aim(params.aim, estimate))
+    VirtualCameraResidual::with_aim_from(camera, u, v, depth, params.baseline, params.aim, estimate)
         .map(|r| Measurement::VirtualCamera(VirtualCameraRef::single(r)))
 }
 
@@ -626,6 +639,21 @@ mod tests {
                 .with_aim(AvcAim::Direct, &aim);
             let gap = (angle.virtual_camera() - direct.virtual_camera()).norm();
             assert!(gap < 1e-16, "{gap} m: a few ulps of b");
+            // Built with the direct aim from the start: the same centre, bit for bit.
+            let built = VirtualCameraResidual::with_aim_from(
+                &camera,
+                u,
+                v,
+                depth,
+                0.09,
+                AvcAim::Direct,
+                &aim,
+            )
+            .unwrap();
+            assert_eq!(
+                built.virtual_camera().map(f64::to_bits),
+                direct.virtual_camera().map(f64::to_bits)
+            );
         }
         // Re-aimed before every round, as the pose-estimation hook does, both aims solve the
         // same pose to far below a micrometre (their bits differ).
