@@ -106,15 +106,28 @@ pub fn pose_optimization_with(
     let mut excluded = vec![false; n];
     let mut outlier = vec![false; n];
     let mut pose = *initial_tcw;
+    // Which observations are defined at the round's start pose (a residual's definedness
+    // depends on the camera-frame point alone, see `CameraResidual::evaluate`): computed once
+    // when every round restarts from the initial pose.
+    let defined_at = |start: &Isometry3<f64>| -> Vec<bool> {
+        obs.iter()
+            .map(|o| chi2_at(camera, start, o).is_some())
+            .collect()
+    };
+    let mut defined_at_initial: Option<Vec<bool>> = None;
+    // The chi2 of every observation at `pose`, once a round has classified them there.
+    let mut chi2_at_pose: Vec<Option<f64>> = Vec::with_capacity(n);
+    let mut classified = false;
     for round in 0..cfg.rounds {
         between_rounds(round, &pose, &mut excluded);
-        let start = if cfg.restart_each_round {
-            *initial_tcw
+        let (start, defined) = if cfg.restart_each_round {
+            let defined = defined_at_initial.get_or_insert_with(|| defined_at(initial_tcw));
+            (*initial_tcw, std::borrow::Cow::Borrowed(defined.as_slice()))
         } else {
-            pose
+            (pose, std::borrow::Cow::Owned(defined_at(&pose)))
         };
         let active: Vec<usize> = (0..n)
-            .filter(|&i| !outlier[i] && !excluded[i] && chi2_at(camera, &start, &obs[i]).is_some())
+            .filter(|&i| !outlier[i] && !excluded[i] && defined[i])
             .collect();
         let candidates = excluded.iter().filter(|&&e| !e).count();
         if round == 0 && active.len() < MIN_CORRESPONDENCES {
@@ -123,18 +136,27 @@ pub fn pose_optimization_with(
         let mut problem = PoseProblem::new(camera, obs, active, round < cfg.robust_rounds, start);
         levenberg_marquardt(&mut problem, cfg.iterations);
         pose = problem.pose;
-        for (i, o) in obs.iter().enumerate() {
-            outlier[i] =
-                !chi2_at(camera, &pose, o).is_some_and(|c| c <= o.measurement.chi2_threshold());
+        chi2_at_pose.clear();
+        chi2_at_pose.extend(obs.iter().map(|o| chi2_at(camera, &pose, o)));
+        for ((out, o), c) in outlier.iter_mut().zip(obs).zip(&chi2_at_pose) {
+            *out = !c.is_some_and(|c| c <= o.measurement.chi2_threshold());
         }
+        classified = true;
         if candidates < MIN_EDGES_FOR_MORE_ROUNDS {
             break;
         }
     }
-    let chi2: Vec<f64> = obs
-        .iter()
-        .map(|o| chi2_at(camera, &pose, o).unwrap_or(f64::INFINITY))
-        .collect();
+    // The final pose is the one the last round classified at, when a round ran.
+    let chi2: Vec<f64> = if classified {
+        chi2_at_pose
+            .iter()
+            .map(|c| c.unwrap_or(f64::INFINITY))
+            .collect()
+    } else {
+        obs.iter()
+            .map(|o| chi2_at(camera, &pose, o).unwrap_or(f64::INFINITY))
+            .collect()
+    };
     let inliers: Vec<bool> = (0..n)
         .map(|i| !excluded[i] && chi2[i] <= obs[i].measurement.chi2_threshold())
         .collect();

@@ -56,7 +56,9 @@ pub trait CameraResidual: Send + Sync + fmt::Debug {
     /// Residual dimension, 1..=[`MAX_RESIDUAL_DOF`].
     fn dof(&self) -> usize;
     /// The residual and `d r / d p_c` at the camera-frame point `p_c`, or `None` when the
-    /// residual is undefined there (the observation then counts as an outlier).
+    /// residual is undefined there (the observation then counts as an outlier). Whether it is
+    /// defined must depend on `p_c` alone, not on state changed between rounds (pose-only
+    /// optimization tests it once per start pose).
     fn evaluate(&self, camera: &Camera, p_c: &Vector3<f64>) -> Option<ResidualBlock>;
     /// The residual alone at `p_c` (what chi2 tests and cost evaluations need): must be the
     /// bits of [`evaluate`](CameraResidual::evaluate)'s `residual`. The default evaluates the
