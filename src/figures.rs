@@ -34,6 +34,17 @@ fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing a figure: {e:?}")
 }
 
+/// Encodes the RGB pixels a `BitMapBackend::with_buffer` drew (`size` = width, height) as a PNG
+/// at `path` (the caller renames it into place). The figures draw into memory and encode with
+/// the `image` crate the rest of noisefree uses, rather than through plotters' own encoder (a
+/// second `image` version to build).
+pub(crate) fn write_png(path: &Path, size: (u32, u32), pixels: Vec<u8>) -> Result<()> {
+    let img = image::RgbImage::from_raw(size.0, size.1, pixels)
+        .ok_or_else(|| anyhow!("a {}x{} figure buffer has the wrong size", size.0, size.1))?;
+    img.save_with_format(path, image::ImageFormat::Png)
+        .map_err(|e| anyhow!("writing {}: {e}", path.display()))
+}
+
 /// Draws the body into `<stem>.png` (1000 x 750) and `<stem>.svg`, each through a temporary
 /// file and a rename. A macro, because the body is instantiated once per backend type.
 macro_rules! both {
@@ -46,13 +57,17 @@ macro_rules! both {
         let tmp_png = stem.with_extension("tmp.png");
         let tmp_svg = stem.with_extension("tmp.svg");
         {
-            let area = BitMapBackend::new(&tmp_png, (1000, 750)).into_drawing_area();
-            area.fill(&WHITE).map_err(err)?;
-            (|| -> Result<()> {
-                let $root = &area;
-                $body
-            })()?;
-            area.present().map_err(err)?;
+            let mut pixels = vec![0u8; 1000 * 750 * 3];
+            {
+                let area = BitMapBackend::with_buffer(&mut pixels, (1000, 750)).into_drawing_area();
+                area.fill(&WHITE).map_err(err)?;
+                (|| -> Result<()> {
+                    let $root = &area;
+                    $body
+                })()?;
+                area.present().map_err(err)?;
+            }
+            write_png(&tmp_png, (1000, 750), pixels)?;
         }
         {
             let area = SVGBackend::new(&tmp_svg, (1000, 750)).into_drawing_area();

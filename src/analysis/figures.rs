@@ -137,9 +137,13 @@ pub fn per_frame_panels(stem: &Path, title: &str, panels: &[Panel]) -> Result<()
     let tmp_png = stem.with_extension("tmp.png");
     let tmp_svg = stem.with_extension("tmp.svg");
     {
-        let area = BitMapBackend::new(&tmp_png, size).into_drawing_area();
-        draw_panels(&area, title, panels)?;
-        area.present().map_err(err)?;
+        let mut pixels = vec![0u8; size.0 as usize * size.1 as usize * 3];
+        {
+            let area = BitMapBackend::with_buffer(&mut pixels, size).into_drawing_area();
+            draw_panels(&area, title, panels)?;
+            area.present().map_err(err)?;
+        }
+        crate::figures::write_png(&tmp_png, size, pixels)?;
     }
     {
         let area = SVGBackend::new(&tmp_svg, size).into_drawing_area();
