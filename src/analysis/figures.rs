@@ -287,11 +287,8 @@ pub fn rejected_features_image(
             .map_err(err)?;
         area.present().map_err(err)?;
     }
-    let img = image::RgbImage::from_raw(w, total_h, buf)
-        .ok_or_else(|| anyhow!("Fig. 7 buffer has the wrong size"))?;
     let tmp = path.with_extension("tmp.png");
-    img.save_with_format(&tmp, image::ImageFormat::Png)
-        .with_context(|| format!("writing {}", tmp.display()))?;
+    crate::figures::write_png(&tmp, (w, total_h), buf)?;
     std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }

@@ -115,9 +115,9 @@ pub fn pose_optimization_with(
             .collect()
     };
     let mut defined_at_initial: Option<Vec<bool>> = None;
-    // The chi2 of every observation at `pose`, once a round has classified them there.
+    // The chi2 of every observation at `pose` once a round has classified them there (empty
+    // before).
     let mut chi2_at_pose: Vec<Option<f64>> = Vec::with_capacity(n);
-    let mut classified = false;
     for round in 0..cfg.rounds {
         between_rounds(round, &pose, &mut excluded);
         let (start, defined) = if cfg.restart_each_round {
@@ -141,13 +141,12 @@ pub fn pose_optimization_with(
         for ((out, o), c) in outlier.iter_mut().zip(obs).zip(&chi2_at_pose) {
             *out = !c.is_some_and(|c| c <= o.measurement.chi2_threshold());
         }
-        classified = true;
         if candidates < MIN_EDGES_FOR_MORE_ROUNDS {
             break;
         }
     }
     // The final pose is the one the last round classified at, when a round ran.
-    let chi2: Vec<f64> = if classified {
+    let chi2: Vec<f64> = if chi2_at_pose.len() == n {
         chi2_at_pose
             .iter()
             .map(|c| c.unwrap_or(f64::INFINITY))
