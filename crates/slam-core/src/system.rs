@@ -341,12 +341,13 @@ impl System {
     }
 
     /// For tests of MC-OR's cluster cache: from now on every cluster it keeps is compared, each
-    /// time a gate uses it, with one rebuilt from the map, and a difference panics. Returns
-    /// how many kept clusters were checked so far.
-    pub fn check_mcor_clusters(&mut self) -> u64 {
+    /// time a gate uses it, with one rebuilt from the map, and every verdict a frame's gates
+    /// keep from round to round with one computed at the gate's pose; a difference panics.
+    /// Returns how many kept clusters and kept verdicts were checked so far.
+    pub fn check_mcor_clusters(&mut self) -> (u64, u64) {
         let cache = self.mcor_clusters.get_mut();
         cache.set_check(true);
-        cache.checked()
+        (cache.checked(), cache.checked_verdicts())
     }
 
     /// The camera.

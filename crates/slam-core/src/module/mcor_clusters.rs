@@ -15,11 +15,11 @@
 //! feature. Before this cache every gate rebuilt every cluster: 54 % of an MC-OR run's
 //! instructions on the 300-frame kinect sequence.
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Matrix3, Vector3};
 
 use crate::data::{KeyFrameId, Map, MapPointId};
-use crate::module::noise::ClusterViews;
-use crate::techniques::mcor::ClusterFeature;
+use crate::module::noise::{ClusterViews, McorParams};
+use crate::techniques::mcor::{ClusterFeature, McorVerdict};
 use crate::techniques::mcor_prepared::PreparedCluster;
 use crate::techniques::{FrameView, FrameViews};
 use crate::Camera;
@@ -42,6 +42,8 @@ pub struct ClusterCache {
     check: bool,
     /// Kept clusters checked so far.
     checked: u64,
+    /// The verdicts of the frame being gated (see [`GateMemo`]).
+    memo: GateMemo,
 }
 
 /// A keyframe's camera-to-world poses as the clusters place features with them.
@@ -158,6 +160,40 @@ impl ClusterCache {
         cluster
     }
 
+    /// The verdicts kept for frame `frame_id` (with `n_keypoints` keypoints) under `params`
+    /// while the clusters stand, or an empty memo for them; give it back with
+    /// [`put_memo`](Self::put_memo).
+    pub fn take_memo(
+        &mut self,
+        frame_id: u64,
+        n_keypoints: usize,
+        params: &McorParams,
+    ) -> GateMemo {
+        let key = (frame_id, self.generation, self.views);
+        let memo = std::mem::take(&mut self.memo);
+        if memo.key == Some(key) && memo.params.as_ref() == Some(params) {
+            return memo;
+        }
+        GateMemo {
+            key: Some(key),
+            params: Some(params.clone()),
+            poses: Vec::new(),
+            kept: vec![None; n_keypoints],
+            check: self.check,
+            checked: memo.checked,
+        }
+    }
+
+    /// Keeps `memo` for the frame's next gate.
+    pub fn put_memo(&mut self, memo: GateMemo) {
+        self.memo = memo;
+    }
+
+    /// Kept verdicts checked against computed ones since [`set_check`](Self::set_check).
+    pub fn checked_verdicts(&self) -> u64 {
+        self.memo.checked
+    }
+
     /// Map point `id`'s cluster, prepared for the map as it stands.
     ///
     /// # Panics
@@ -212,5 +248,87 @@ impl ClusterCache {
             twc_good: map.keyframe(kf).map(|k| k.tcw.inverse()),
             twc_any: map.keyframe_pose_any(kf).map(|t| t.inverse()),
         }
+    }
+}
+
+/// MC-OR's verdicts for the matches of one frame, kept across the rounds of its pose
+/// optimizations and its gates (motion model, local map, the statistics at the final pose):
+/// a verdict is computed again only when the pose moved the match's current feature by as
+/// much as the verdict's reach
+/// ([`PreparedCluster::verdict_with_reach`](crate::techniques::mcor_prepared::PreparedCluster::verdict_with_reach)),
+/// so every gate has the verdicts a full gate would give. Poses move features by millimetres
+/// between rounds and the thresholds are decimetres: most verdicts of a frame are computed once.
+#[derive(Clone, Debug, Default)]
+pub struct GateMemo {
+    /// The frame, the clusters' generation and reading the verdicts belong to.
+    key: Option<(u64, u64, Option<ClusterViews>)>,
+    /// The thresholds they were judged with.
+    params: Option<McorParams>,
+    /// The camera-to-world poses verdicts were computed at: rotation, translation.
+    poses: Vec<(Matrix3<f64>, Vector3<f64>)>,
+    /// Per keypoint: the map point it was judged with, the verdict, its reach (metres) and the
+    /// index of its pose in `poses`.
+    kept: Vec<Option<(MapPointId, McorVerdict, f64, usize)>>,
+    /// Checking: every kept verdict handed out is compared with one computed (the cache's
+    /// [`set_check`](ClusterCache::set_check)).
+    check: bool,
+    /// Kept verdicts checked so far.
+    checked: u64,
+}
+
+impl GateMemo {
+    /// For a gate at pose `twc`, per earlier pose: the bounds (a, b) of how far the change
+    /// moves a camera-frame point p in the world, |dR p + dt| <= a |p| + b (a: the Frobenius
+    /// norm of the rotation's change, which bounds its operator norm). The pose is recorded
+    /// for the verdicts computed at it.
+    pub fn moves(&mut self, twc: &Isometry3<f64>) -> Vec<(f64, f64)> {
+        let r = *twc.rotation.to_rotation_matrix().matrix();
+        let t = twc.translation.vector;
+        let moved = self
+            .poses
+            .iter()
+            .map(|(r0, t0)| ((r - r0).norm(), (t - t0).norm()))
+            .collect();
+        self.poses.push((r, t));
+        moved
+    }
+
+    /// The verdict of `match_` (keypoint index, map point) at the pose last given to
+    /// [`moves`](Self::moves), which returned `moved`; `p_norm` is the norm of its current
+    /// feature (camera frame, 0 without one). The kept verdict while the pose moved the feature
+    /// by less than its reach, else `compute()` (verdict and reach), kept.
+    #[inline]
+    pub fn verdict(
+        &mut self,
+        match_: (usize, MapPointId),
+        moved: &[(f64, f64)],
+        p_norm: f64,
+        compute: impl FnOnce() -> (McorVerdict, f64),
+    ) -> McorVerdict {
+        let (i, id) = match_;
+        if let Some(Some((kept_id, verdict, reach, at))) = self.kept.get(i) {
+            // `moved` has an entry for every pose before the gate's own.
+            if *kept_id == id {
+                if let Some((a, b)) = moved.get(*at) {
+                    if a * p_norm + b < *reach {
+                        let kept = *verdict;
+                        if self.check {
+                            let (computed, _) = compute();
+                            assert_eq!(
+                                kept, computed,
+                                "the kept verdict of {id} is not the gate's"
+                            );
+                            self.checked += 1;
+                        }
+                        return kept;
+                    }
+                }
+            }
+        }
+        let (verdict, reach) = compute();
+        if let Some(slot) = self.kept.get_mut(i) {
+            *slot = Some((id, verdict, reach, self.poses.len() - 1));
+        }
+        verdict
     }
 }

@@ -23,7 +23,7 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use super::mcor_clusters::ClusterCache;
+use super::mcor_clusters::{ClusterCache, GateMemo};
 use super::noise::{AvcParams, ClusterViews, McorParams};
 use crate::camera::Camera;
 use crate::data::MapPointId;
@@ -177,21 +177,29 @@ pub fn mcor_frame_gate_with(
         n_rejected_clusters: 0,
         n_rejected_features: 0,
     };
+    let mut matched = Vec::new();
     for i in 0..frame.len() {
         let Some(id) = frame.map_points[i] else {
             continue;
         };
-        if !clusters.prepare(map, id, camera, params.cluster_views) {
-            continue;
+        if clusters.prepare(map, id, camera, params.cluster_views) {
+            matched.push((i, id));
         }
+    }
+    // The frame's pose optimizations gated these matches at nearby poses.
+    let mut memo = clusters.take_memo(frame.id, frame.len(), params);
+    let moved = memo.moves(&twc);
+    for (i, id) in matched {
         index.push(i);
         let point_camera = gate_point(frame.features.unproject_camera(i, camera));
-        outcome.push(
+        let p_norm = point_camera.map_or(0.0, |p| p.norm());
+        outcome.push(memo.verdict((i, id), &moved, p_norm, || {
             clusters
                 .cluster(id)
-                .verdict(params, &twc, point_camera.as_ref()),
-        );
+                .verdict_with_reach(params, &twc, point_camera.as_ref())
+        }));
     }
+    clusters.put_memo(memo);
     (index, outcome)
 }
 
@@ -482,7 +490,12 @@ pub fn optimize_frame_pose(
             .collect(),
         None => Vec::new(),
     };
-    let clusters: &ClusterCache = clusters;
+    // MC-OR's verdicts kept across the rounds and the gates of this frame.
+    let memo = std::cell::RefCell::new(match hooks.mcor {
+        Some(params) => clusters.take_memo(frame.id, frame.len(), params),
+        None => GateMemo::default(),
+    });
+    let shared: &ClusterCache = clusters;
     let gated: Vec<Option<Vector3<f64>>> = match hooks.mcor {
         Some(_) => index
             .iter()
@@ -490,6 +503,8 @@ pub fn optimize_frame_pose(
             .collect(),
         None => Vec::new(),
     };
+    // |p| of each current feature (camera frame): how far a pose change can move it.
+    let gated_norm: Vec<f64> = gated.iter().map(|p| p.map_or(0.0, |p| p.norm())).collect();
     let tapped = tap_active();
     let rc_veto_rounds = hooks.rc.map_or(0, |p| p.veto_rounds);
     // One pose optimization from `start`; `veto` (one per match) keeps matches out of the
@@ -521,13 +536,19 @@ pub fn optimize_frame_pose(
             }
             if let Some(params) = hooks.mcor {
                 let twc = pose.inverse();
+                let mut memo = memo.borrow_mut();
+                let moved = memo.moves(&twc);
                 let mut verdicts = Vec::new();
                 last_gate = (0, 0);
                 for (k, e) in excluded.iter_mut().enumerate() {
-                    let verdict =
-                        clusters
-                            .cluster(cluster_of[k])
-                            .verdict(params, &twc, gated[k].as_ref());
+                    let key = (index[k], cluster_of[k]);
+                    let verdict = memo.verdict(key, &moved, gated_norm[k], || {
+                        shared.cluster(cluster_of[k]).verdict_with_reach(
+                            params,
+                            &twc,
+                            gated[k].as_ref(),
+                        )
+                    });
                     match verdict {
                         McorVerdict::RejectedCluster => last_gate.0 += 1,
                         McorVerdict::RejectedFeature => last_gate.1 += 1,
@@ -579,6 +600,9 @@ pub fn optimize_frame_pose(
             solved
         }
     };
+    if hooks.mcor.is_some() {
+        clusters.put_memo(memo.into_inner());
+    }
     frame.tcw = Some(renormalized(&result.pose));
     for (k, &i) in index.iter().enumerate() {
         frame.outliers[i] = !result.inliers[k];

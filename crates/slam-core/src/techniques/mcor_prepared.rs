@@ -188,6 +188,33 @@ impl PreparedCluster {
         twc: &Isometry3<f64>,
         point_camera: Option<&Vector3<f64>>,
     ) -> McorVerdict {
+        self.judge::<false>(params, twc, point_camera).0
+    }
+
+    /// [`verdict`](Self::verdict), and its *reach*: how far (metres, world frame) the current
+    /// feature X_cur may move, by a change of the frame's pose, before any comparison of
+    /// Algorithm 1 that decides the verdict could turn (each metric's distance to its threshold,
+    /// less a rounding allowance, over how fast the metric can follow X_cur). A gate that moves
+    /// the pose by less than the reach between two rounds has the same verdict without
+    /// computing it. Infinite without a current feature (nothing then depends on the pose);
+    /// zero for the depth-normalised variant (not bounded here: always recomputed).
+    pub fn verdict_with_reach(
+        &self,
+        params: &McorParams,
+        twc: &Isometry3<f64>,
+        point_camera: Option<&Vector3<f64>>,
+    ) -> (McorVerdict, f64) {
+        self.judge::<true>(params, twc, point_camera)
+    }
+
+    /// The verdict, and with `REACH` its reach (else 0): one body, so that both give the same
+    /// verdict by the same operations.
+    fn judge<const REACH: bool>(
+        &self,
+        params: &McorParams,
+        twc: &Isometry3<f64>,
+        point_camera: Option<&Vector3<f64>>,
+    ) -> (McorVerdict, f64) {
         let ring = &self.features[self.ring_start..];
         // X_cur as `ClusterFeature::new` places it.
         let cur = point_camera.map(|p| {
@@ -200,7 +227,7 @@ impl PreparedCluster {
         });
         let n_features = ring.len() + usize::from(cur.is_some());
         if n_features == 0 {
-            return McorVerdict::Kept;
+            return (McorVerdict::Kept, f64::INFINITY);
         }
         // G (Eq. 1): the sums of `McorCluster::centroid_with`.
         let mut sum = self.ring_sum;
@@ -214,9 +241,9 @@ impl PreparedCluster {
         if params.depth_normalised {
             let (cl1, cl2, cl3) = exact_metrics(m, &g, ring, cur.as_ref(), true);
             if cl1 > params.tau_mf || cl2 > params.tau_gf || cl3 > params.tau_mg {
-                return McorVerdict::RejectedCluster;
+                return (McorVerdict::RejectedCluster, 0.0);
             }
-            return match &cur {
+            let verdict = match &cur {
                 Some(f) => {
                     let scale = 1.0 / f.depth;
                     let to_m = (m - f.point_world).norm() * scale;
@@ -229,7 +256,18 @@ impl PreparedCluster {
                 }
                 None => McorVerdict::Kept,
             };
+            return (verdict, 0.0);
         }
+        // How fast each metric follows X_cur (metres per metre; see `Reach`).
+        let reach = Reach::<REACH>::new(
+            m,
+            &g,
+            cur.as_ref(),
+            self.ring_to_map_point,
+            self.total_f64[1],
+            n,
+            self.ring_len_f64,
+        );
         // FL1 and FL2 of X_cur (Eq. 2, 3), which CL1 and the CL2 bound use too.
         let fl = cur.as_ref().map(|f| {
             (
@@ -244,22 +282,131 @@ impl PreparedCluster {
         let cl1 = sum_m / n;
         let cl3 = (m - g).norm();
         if cl1 > params.tau_mf || cl3 > params.tau_mg {
-            return McorVerdict::RejectedCluster;
+            // Rejected while either stays above its threshold.
+            let r = reach
+                .above(cl1, params.tau_mf, reach.per_cl1)
+                .max(reach.above(cl3, params.tau_mg, reach.per_cl3));
+            return (McorVerdict::RejectedCluster, r);
         }
+        let mut r = reach
+            .below(cl1, params.tau_mf, reach.per_cl1)
+            .min(reach.below(cl3, params.tau_mg, reach.per_cl3));
         // CL2 <= (len |G - M| + sum |M - X_i| + |G - X_cur|) / n.
         let bound = self.ring_len_f64 * cl3 + self.ring_to_map_point + fl.map_or(0.0, |f| f.1);
         let certain = bound * (1.0 + BOUND_MARGIN) < params.tau_gf * n * (1.0 - BOUND_MARGIN);
-        if !certain {
+        if certain {
+            // The exact CL2 is at most the bound, and stays under tau_GF while the bound would.
+            r = r.min(reach.below(bound / n, params.tau_gf, reach.per_cl2));
+        } else {
             let (_, cl2, _) = exact_metrics(m, &g, ring, cur.as_ref(), false);
             if cl2 > params.tau_gf {
-                return McorVerdict::RejectedCluster;
+                return (
+                    McorVerdict::RejectedCluster,
+                    reach.above(cl2, params.tau_gf, reach.per_cl2),
+                );
             }
+            r = r.min(reach.below(cl2, params.tau_gf, reach.per_cl2));
         }
         match fl {
             Some((to_m, to_g)) if to_m > params.tau_mf || to_g > params.tau_gf => {
-                McorVerdict::RejectedFeature
+                // Rejected while the cluster passes and either FL metric stays above.
+                let fl_reach = reach.above(to_m, params.tau_mf, 1.0).max(reach.above(
+                    to_g,
+                    params.tau_gf,
+                    1.0,
+                ));
+                (McorVerdict::RejectedFeature, r.min(fl_reach))
             }
-            _ => McorVerdict::Kept,
+            Some((to_m, to_g)) => (
+                McorVerdict::Kept,
+                r.min(reach.below(to_m, params.tau_mf, 1.0))
+                    .min(reach.below(to_g, params.tau_gf, 1.0)),
+            ),
+            None => (McorVerdict::Kept, f64::INFINITY),
+        }
+    }
+}
+
+/// How far X_cur may move with a metric keeping its side of its threshold, for
+/// [`PreparedCluster::verdict_with_reach`] (inert without `ON`). When X_cur moves by d,
+/// G = (sum + X_cur) / N moves by d / N; FL1 = |M - X_cur| and FL2 = |G - X_cur| by at most d
+/// (the latter by d (1 - 1/N)); CL1 = (sum |M - X_i| + FL1) / n by d / n; CL3 = |M - G| by
+/// d / N; CL2 = (sum |G - X_i| + FL2) / n by (len d / N + d) / n, as does its bound. The reach
+/// of a margin is the margin, less twice the rounding allowance, over that rate.
+struct Reach<const ON: bool> {
+    /// n, N, and n N / (len + N): the inverse rates of CL1, CL3 and CL2.
+    per_cl1: f64,
+    per_cl3: f64,
+    per_cl2: f64,
+    /// Absolute rounding allowance, metres: 1e-9 of the coordinates' magnitude (M, G, X_cur,
+    /// and the ring's, at most |M| + sum |M - X_i|). A metric is a sum of at most a few dozen
+    /// norms (G's of every feature, relative to their mean), off its exact value by ~1e-14
+    /// of that magnitude: the allowance is 1e5 times that, and far under any useful threshold.
+    slack: f64,
+    /// Without X_cur: nothing depends on the pose.
+    fixed: bool,
+}
+
+impl<const ON: bool> Reach<ON> {
+    fn new(
+        m: &Vector3<f64>,
+        g: &Vector3<f64>,
+        cur: Option<&RingFeature>,
+        ring_to_map_point: f64,
+        total_with: f64,
+        n_with: f64,
+        ring_len: f64,
+    ) -> Self {
+        if !ON {
+            return Reach {
+                per_cl1: 0.0,
+                per_cl3: 0.0,
+                per_cl2: 0.0,
+                slack: 0.0,
+                fixed: true,
+            };
+        }
+        let scale = 1.0
+            + 2.0 * m.amax()
+            + ring_to_map_point
+            + g.amax()
+            + cur.map_or(0.0, |f| f.point_world.amax());
+        Reach {
+            per_cl1: n_with,
+            per_cl3: total_with,
+            per_cl2: n_with * total_with / (ring_len + total_with),
+            slack: 1e-9 * scale,
+            fixed: cur.is_none(),
+        }
+    }
+
+    /// How far X_cur may move with `value` (above `tau`) staying above; `per` is the inverse
+    /// of the metric's rate.
+    #[inline]
+    fn above(&self, value: f64, tau: f64, per: f64) -> f64 {
+        self.within(value - tau, per)
+    }
+
+    /// How far X_cur may move with `value` (at most `tau`) staying at most `tau`.
+    #[inline]
+    fn below(&self, value: f64, tau: f64, per: f64) -> f64 {
+        self.within(tau - value, per)
+    }
+
+    #[inline]
+    fn within(&self, margin: f64, per: f64) -> f64 {
+        if !ON {
+            return 0.0;
+        }
+        if self.fixed {
+            return f64::INFINITY;
+        }
+        let r = (margin - 2.0 * self.slack) * per;
+        // NaN (a non-finite metric) and negative margins: no reach.
+        if r > 0.0 {
+            r
+        } else {
+            0.0
         }
     }
 }
@@ -403,5 +550,158 @@ mod tests {
         }
         assert!(near_threshold > 500);
         assert!(rejected.iter().all(|&r| r > 100), "{rejected:?}");
+    }
+
+    /// A gated match: its cluster, current feature, frame pose and thresholds.
+    type Trial = (
+        PreparedCluster,
+        Option<Vector3<f64>>,
+        Isometry3<f64>,
+        McorParams,
+    );
+
+    /// Trials of [`verdicts_are_those_of_the_gate_over_whole_clusters`]'s kind with
+    /// thresholds set near the cluster's own metrics every other trial: (cluster, current
+    /// feature, pose, thresholds).
+    fn near_threshold_trials(seed: u64, trials: usize) -> Vec<Trial> {
+        let mut g = rng(seed);
+        (0..trials)
+            .map(|trial| {
+                let centre = Vector3::new(
+                    g.random_range(-1.0..1.0),
+                    g.random_range(-1.0..1.0),
+                    g.random_range(0.5..3.0),
+                );
+                let spread = [0.002, 0.02, 0.2, 0.6][trial % 4];
+                let n = g.random_range(0..40);
+                let split = g.random_range(0..=n);
+                let (cluster, prepared) = both(&mut g, centre, spread, n, split, [0, 7][trial % 2]);
+                let twc = Isometry3::from_parts(
+                    Translation3::new(gaussian(&mut g) * 0.1, 0.1, -2.0),
+                    UnitQuaternion::from_euler_angles(0.02, gaussian(&mut g) * 0.1, 0.0),
+                );
+                let current = (trial % 5 != 0).then(|| {
+                    let w = centre + Vector3::new(gaussian(&mut g), gaussian(&mut g), 0.0) * spread;
+                    (twc.inverse() * Point3::from(w)).coords
+                });
+                let mut params = McorParams::default();
+                let m = centre + Vector3::new(0.01, -0.02, 0.015);
+                let cur = current.and_then(|p| ClusterFeature::new(u64::MAX, p, &twc));
+                if let (true, Some(x)) = (trial % 2 == 0, cluster.metrics(&m, cur.as_ref(), false))
+                {
+                    // Each threshold within a few millimetres of its metric, either side.
+                    let near = |v: f64, g: &mut rand_chacha::ChaCha8Rng| {
+                        (v + g.random_range(-0.004..0.004)).max(1e-6)
+                    };
+                    params.tau_mf = near(x.cluster.mean_to_map_point, &mut g);
+                    params.tau_gf = near(x.cluster.mean_to_centroid, &mut g);
+                    params.tau_mg = near(x.cluster.map_point_to_centroid, &mut g);
+                }
+                (prepared, gate_point(current), twc, params)
+            })
+            .collect()
+    }
+
+    /// A pose `twc` moved so that camera-frame point `p` moves by `d` metres in the world:
+    /// a rotation about the camera centre and a translation, in a random mix.
+    fn moved_by(
+        g: &mut rand_chacha::ChaCha8Rng,
+        twc: &Isometry3<f64>,
+        p: &Vector3<f64>,
+        d: f64,
+    ) -> Isometry3<f64> {
+        let dir = Vector3::new(gaussian(g), gaussian(g), gaussian(g)).normalize();
+        let share: f64 = g.random_range(0.0..1.0);
+        // Rotating by a small angle a moves p by at most a |p|.
+        let angle = share * d / p.norm().max(1e-9);
+        let rotated = Isometry3::from_parts(
+            twc.translation,
+            UnitQuaternion::from_scaled_axis(dir * angle) * twc.rotation,
+        );
+        let now = rotated * Point3::from(*p);
+        let then = twc * Point3::from(*p);
+        // The translation takes up what the rotation left of d, along a random direction.
+        let left = (d - (now - then).norm()).max(0.0);
+        let dir_t = Vector3::new(gaussian(g), gaussian(g), gaussian(g)).normalize();
+        Isometry3::from_parts(
+            Translation3::from(rotated.translation.vector + dir_t * left),
+            rotated.rotation,
+        )
+    }
+
+    #[test]
+    fn a_verdict_holds_while_the_pose_moves_its_feature_less_than_its_reach() {
+        let mut g = rng(11);
+        let (mut bounded, mut flipped_beyond) = (0, 0);
+        for (k, (cluster, current, twc, params)) in
+            near_threshold_trials(21, 4000).into_iter().enumerate()
+        {
+            let (verdict, reach) = cluster.verdict_with_reach(&params, &twc, current.as_ref());
+            assert_eq!(verdict, cluster.verdict(&params, &twc, current.as_ref()));
+            let Some(p) = current else {
+                assert_eq!(reach, f64::INFINITY, "trial {k}: no feature, nothing moves");
+                continue;
+            };
+            assert!(reach >= 0.0, "trial {k}: reach {reach}");
+            if !reach.is_finite() || reach > 1.0 {
+                continue;
+            }
+            bounded += 1;
+            // Anywhere within the reach: the same verdict.
+            for _ in 0..4 {
+                let d = reach * g.random_range(0.0..1.0);
+                let moved = moved_by(&mut g, &twc, &p, d);
+                assert_eq!(
+                    cluster.verdict(&params, &moved, Some(&p)),
+                    verdict,
+                    "trial {k}: moved {d} m within the reach {reach} m"
+                );
+            }
+            // The reach is not a vacuous bound: a few times beyond it the verdict often turns.
+            let moved = moved_by(&mut g, &twc, &p, 3.0 * reach + 1e-4);
+            if cluster.verdict(&params, &moved, Some(&p)) != verdict {
+                flipped_beyond += 1;
+            }
+        }
+        assert!(bounded > 1000, "{bounded} trials with a finite reach");
+        assert!(
+            flipped_beyond > 100,
+            "{flipped_beyond} verdicts turned beyond the reach"
+        );
+    }
+
+    #[test]
+    fn the_gate_memo_gives_every_pose_the_verdicts_of_a_full_gate() {
+        use crate::data::MapPointId;
+        use crate::module::mcor_clusters::ClusterCache;
+        let trials = near_threshold_trials(33, 300);
+        let mut g = rng(3);
+        let params = McorParams::default();
+        let mut memo = ClusterCache::new().take_memo(7, trials.len(), &params);
+        let mut twc = trials[0].2;
+        let mut computed = 0;
+        let poses = 12;
+        for round in 0..poses {
+            // Millimetre steps between rounds, and a decimetre jump now and then.
+            let step = if round % 5 == 4 { 0.1 } else { 0.002 };
+            twc = moved_by(&mut g, &twc, &Vector3::new(0.3, -0.2, 2.0), step);
+            let moved = memo.moves(&twc);
+            for (k, (cluster, current, _, _)) in trials.iter().enumerate() {
+                let full = cluster.verdict(&params, &twc, current.as_ref());
+                let p_norm = current.map_or(0.0, |p| p.norm());
+                let kept = memo.verdict((k, MapPointId(k as u32)), &moved, p_norm, || {
+                    computed += 1;
+                    cluster.verdict_with_reach(&params, &twc, current.as_ref())
+                });
+                assert_eq!(kept, full, "round {round}, match {k}");
+            }
+        }
+        // Every match judged at the first pose and after each jump at most; rarely between.
+        assert!(computed >= trials.len());
+        assert!(
+            computed < trials.len() * poses / 3,
+            "{computed} verdicts computed for {} matches over {poses} poses",
+            trials.len()
+        );
     }
 }
