@@ -14,6 +14,9 @@
 //! feature, with each keyframe's inverse pose computed once per map state instead of once per
 //! feature. Before this cache every gate rebuilt every cluster: 54 % of an MC-OR run's
 //! instructions on the 300-frame kinect sequence.
+//!
+//! Beside the clusters, the cache keeps the verdicts of the frame being gated ([`GateMemo`]),
+//! so that its gates compute a verdict again only when the pose moved far enough to change it.
 
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
@@ -170,18 +173,18 @@ impl ClusterCache {
         params: &McorParams,
     ) -> GateMemo {
         let key = (frame_id, self.generation, self.views);
-        let memo = std::mem::take(&mut self.memo);
+        let mut memo = std::mem::take(&mut self.memo);
         if memo.key == Some(key) && memo.params.as_ref() == Some(params) {
             return memo;
         }
-        GateMemo {
-            key: Some(key),
-            params: Some(params.clone()),
-            poses: Vec::new(),
-            kept: vec![None; n_keypoints],
-            check: self.check,
-            checked: memo.checked,
-        }
+        // A new frame (or map, or thresholds): forget the verdicts, keep the buffers.
+        memo.key = Some(key);
+        memo.params = Some(params.clone());
+        memo.poses.clear();
+        memo.kept.clear();
+        memo.kept.resize(n_keypoints, None);
+        memo.check = self.check;
+        memo
     }
 
     /// Keeps `memo` for the frame's next gate.
@@ -326,8 +329,9 @@ impl GateMemo {
             }
         }
         let (verdict, reach) = compute();
-        if let Some(slot) = self.kept.get_mut(i) {
-            *slot = Some((id, verdict, reach, self.poses.len() - 1));
+        // Kept at the gate's pose (none before the first `moves`: then not kept).
+        if let (Some(slot), Some(at)) = (self.kept.get_mut(i), self.poses.len().checked_sub(1)) {
+            *slot = Some((id, verdict, reach, at));
         }
         verdict
     }
