@@ -181,6 +181,7 @@ impl ClusterCache {
         memo.key = Some(key);
         memo.params = Some(params.clone());
         memo.poses.clear();
+        memo.moved.clear();
         memo.kept.clear();
         memo.kept.resize(n_keypoints, None);
         memo.check = self.check;
@@ -269,6 +270,8 @@ pub struct GateMemo {
     params: Option<McorParams>,
     /// The camera-to-world poses verdicts were computed at: rotation, translation.
     poses: Vec<(Matrix3<f64>, Vector3<f64>)>,
+    /// For the current gate (the last pose), per earlier pose: the bounds of [`moves`](Self::moves).
+    moved: Vec<(f64, f64)>,
     /// Per keypoint: the map point it was judged with, the verdict, its reach (metres) and the
     /// index of its pose in `poses`.
     kept: Vec<Option<(MapPointId, McorVerdict, f64, usize)>>,
@@ -280,31 +283,30 @@ pub struct GateMemo {
 }
 
 impl GateMemo {
-    /// For a gate at pose `twc`, per earlier pose: the bounds (a, b) of how far the change
+    /// Starts a gate at pose `twc`: per earlier pose, the bounds (a, b) of how far the change
     /// moves a camera-frame point p in the world, |dR p + dt| <= a |p| + b (a: the Frobenius
-    /// norm of the rotation's change, which bounds its operator norm). The pose is recorded
+    /// norm of the rotation's change, which bounds its operator norm); the pose is recorded
     /// for the verdicts computed at it.
-    pub fn moves(&mut self, twc: &Isometry3<f64>) -> Vec<(f64, f64)> {
+    pub fn moves(&mut self, twc: &Isometry3<f64>) {
         let r = *twc.rotation.to_rotation_matrix().matrix();
         let t = twc.translation.vector;
-        let moved = self
-            .poses
-            .iter()
-            .map(|(r0, t0)| ((r - r0).norm(), (t - t0).norm()))
-            .collect();
+        self.moved.clear();
+        self.moved.extend(
+            self.poses
+                .iter()
+                .map(|(r0, t0)| ((r - r0).norm(), (t - t0).norm())),
+        );
         self.poses.push((r, t));
-        moved
     }
 
     /// The verdict of `match_` (keypoint index, map point) at the pose last given to
-    /// [`moves`](Self::moves), which returned `moved`; `p_norm` is the norm of its current
+    /// [`moves`](Self::moves); `p_norm` is the norm of its current
     /// feature (camera frame, 0 without one). The kept verdict while the pose moved the feature
     /// by less than its reach, else `compute()` (verdict and reach), kept.
     #[inline]
     pub fn verdict(
         &mut self,
         match_: (usize, MapPointId),
-        moved: &[(f64, f64)],
         p_norm: f64,
         compute: impl FnOnce() -> (McorVerdict, f64),
     ) -> McorVerdict {
@@ -312,7 +314,7 @@ impl GateMemo {
         if let Some(Some((kept_id, verdict, reach, at))) = self.kept.get(i) {
             // `moved` has an entry for every pose before the gate's own.
             if *kept_id == id {
-                if let Some((a, b)) = moved.get(*at) {
+                if let Some((a, b)) = self.moved.get(*at) {
                     if a * p_norm + b < *reach {
                         let kept = *verdict;
                         if self.check {

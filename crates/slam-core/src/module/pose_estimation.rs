@@ -188,12 +188,12 @@ pub fn mcor_frame_gate_with(
     }
     // The frame's pose optimizations gated these matches at nearby poses.
     let mut memo = clusters.take_memo(frame.id, frame.len(), params);
-    let moved = memo.moves(&twc);
+    memo.moves(&twc);
     for (i, id) in matched {
         index.push(i);
         let point_camera = gate_point(frame.features.unproject_camera(i, camera));
         let p_norm = point_camera.map_or(0.0, |p| p.norm());
-        outcome.push(memo.verdict((i, id), &moved, p_norm, || {
+        outcome.push(memo.verdict((i, id), p_norm, || {
             clusters
                 .cluster(id)
                 .verdict_with_reach(params, &twc, point_camera.as_ref())
@@ -537,12 +537,12 @@ pub fn optimize_frame_pose(
             if let Some(params) = hooks.mcor {
                 let twc = pose.inverse();
                 let mut memo = memo.borrow_mut();
-                let moved = memo.moves(&twc);
+                memo.moves(&twc);
                 let mut verdicts = Vec::new();
                 last_gate = (0, 0);
                 for (k, e) in excluded.iter_mut().enumerate() {
                     let key = (index[k], cluster_of[k]);
-                    let verdict = memo.verdict(key, &moved, gated_norm[k], || {
+                    let verdict = memo.verdict(key, gated_norm[k], || {
                         shared.cluster(cluster_of[k]).verdict_with_reach(
                             params,
                             &twc,

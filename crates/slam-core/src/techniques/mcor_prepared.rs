@@ -481,30 +481,49 @@ mod tests {
         (cluster, arena)
     }
 
+    /// A random gated match, trial `trial`: a cluster of up to `max_n` features (built both
+    /// ways, `folded` of them folded), the frame pose, and the current feature (camera frame;
+    /// none every fifth trial) near the cluster's centre; with the centre.
+    fn random_match(
+        g: &mut rand_chacha::ChaCha8Rng,
+        trial: usize,
+        max_n: usize,
+        folded: u64,
+    ) -> (
+        McorCluster,
+        PreparedCluster,
+        Isometry3<f64>,
+        Option<Vector3<f64>>,
+        Vector3<f64>,
+    ) {
+        let centre = Vector3::new(
+            g.random_range(-1.0..1.0),
+            g.random_range(-1.0..1.0),
+            g.random_range(0.5..3.0),
+        );
+        let spread = [0.002, 0.02, 0.2, 0.6][trial % 4];
+        let n = g.random_range(0..max_n);
+        let split = g.random_range(0..=n);
+        let (cluster, prepared) = both(g, centre, spread, n, split, folded);
+        let twc = Isometry3::from_parts(
+            Translation3::new(gaussian(g) * 0.1, 0.1, -2.0),
+            UnitQuaternion::from_euler_angles(0.02, gaussian(g) * 0.1, 0.0),
+        );
+        let current = (!trial.is_multiple_of(5)).then(|| {
+            let w = centre + Vector3::new(gaussian(g), gaussian(g), 0.0) * spread;
+            (twc.inverse() * Point3::from(w)).coords
+        });
+        (cluster, prepared, twc, current, centre)
+    }
+
     #[test]
     fn verdicts_are_those_of_the_gate_over_whole_clusters() {
         let mut g = rng(5);
         let mut near_threshold = 0;
         let mut rejected = [0usize; 3];
         for trial in 0..3000 {
-            let centre = Vector3::new(
-                g.random_range(-1.0..1.0),
-                g.random_range(-1.0..1.0),
-                g.random_range(0.5..3.0),
-            );
-            let spread = [0.002, 0.02, 0.2, 0.6][trial % 4];
-            let n = g.random_range(0..45);
-            let split = g.random_range(0..=n);
             let folded = [0, 0, 3, 40][trial % 4 / 2 + trial % 2];
-            let (cluster, prepared) = both(&mut g, centre, spread, n, split, folded);
-            let twc = Isometry3::from_parts(
-                Translation3::new(gaussian(&mut g) * 0.1, 0.1, -2.0),
-                UnitQuaternion::from_euler_angles(0.02, gaussian(&mut g) * 0.1, 0.0),
-            );
-            let current = (trial % 5 != 0).then(|| {
-                let w = centre + Vector3::new(gaussian(&mut g), gaussian(&mut g), 0.0) * spread;
-                (twc.inverse() * Point3::from(w)).coords
-            });
+            let (cluster, prepared, twc, current, centre) = random_match(&mut g, trial, 45, folded);
             let m = centre + Vector3::new(0.01, -0.02, 0.015);
             let mut params = McorParams {
                 depth_normalised: trial % 7 == 0,
@@ -539,8 +558,11 @@ mod tests {
             .verdicts[0];
             let got = prepared.verdict(&params, &twc, gate_point(current).as_ref());
             assert_eq!(
-                got, expected,
-                "trial {trial}: n {n}, split {split}, folded {folded}"
+                got,
+                expected,
+                "trial {trial}: n {}, split {}, folded {folded}",
+                prepared.features.len(),
+                prepared.n_keyframe
             );
             rejected[match got {
                 McorVerdict::Kept => 0,
@@ -560,30 +582,14 @@ mod tests {
         McorParams,
     );
 
-    /// Trials of [`verdicts_are_those_of_the_gate_over_whole_clusters`]'s kind with
-    /// thresholds set near the cluster's own metrics every other trial: (cluster, current
+    /// [`random_match`]es with thresholds set near the cluster's own metrics every other trial: (cluster, current
     /// feature, pose, thresholds).
     fn near_threshold_trials(seed: u64, trials: usize) -> Vec<Trial> {
         let mut g = rng(seed);
         (0..trials)
             .map(|trial| {
-                let centre = Vector3::new(
-                    g.random_range(-1.0..1.0),
-                    g.random_range(-1.0..1.0),
-                    g.random_range(0.5..3.0),
-                );
-                let spread = [0.002, 0.02, 0.2, 0.6][trial % 4];
-                let n = g.random_range(0..40);
-                let split = g.random_range(0..=n);
-                let (cluster, prepared) = both(&mut g, centre, spread, n, split, [0, 7][trial % 2]);
-                let twc = Isometry3::from_parts(
-                    Translation3::new(gaussian(&mut g) * 0.1, 0.1, -2.0),
-                    UnitQuaternion::from_euler_angles(0.02, gaussian(&mut g) * 0.1, 0.0),
-                );
-                let current = (trial % 5 != 0).then(|| {
-                    let w = centre + Vector3::new(gaussian(&mut g), gaussian(&mut g), 0.0) * spread;
-                    (twc.inverse() * Point3::from(w)).coords
-                });
+                let (cluster, prepared, twc, current, centre) =
+                    random_match(&mut g, trial, 40, [0, 7][trial % 2]);
                 let mut params = McorParams::default();
                 let m = centre + Vector3::new(0.01, -0.02, 0.015);
                 let cur = current.and_then(|p| ClusterFeature::new(u64::MAX, p, &twc));
@@ -685,11 +691,11 @@ mod tests {
             // Millimetre steps between rounds, and a decimetre jump now and then.
             let step = if round % 5 == 4 { 0.1 } else { 0.002 };
             twc = moved_by(&mut g, &twc, &Vector3::new(0.3, -0.2, 2.0), step);
-            let moved = memo.moves(&twc);
+            memo.moves(&twc);
             for (k, (cluster, current, _, _)) in trials.iter().enumerate() {
                 let full = cluster.verdict(&params, &twc, current.as_ref());
                 let p_norm = current.map_or(0.0, |p| p.norm());
-                let kept = memo.verdict((k, MapPointId(k as u32)), &moved, p_norm, || {
+                let kept = memo.verdict((k, MapPointId(k as u32)), p_norm, || {
                     computed += 1;
                     cluster.verdict_with_reach(&params, &twc, current.as_ref())
                 });
