@@ -101,7 +101,8 @@ pub fn open(
                 if n == 0 {
                     bail!("--frames must be at least 1");
                 }
-                let (mut s, frames) = datasets::open_synth(&generator, n);
+                let cache = synth::cache_dir_from_env();
+                let (mut s, frames) = datasets::open_synth_cached(&generator, n, cache.as_deref());
                 s.name = entry.name.clone();
                 (s, frames)
             } else {

@@ -45,7 +45,8 @@ impl SuiteSequence {
         }
         config.motion_scale *= self.motion_scale;
         let generator = synth::Generator::try_new(config, self.synth_seed)?;
-        let mut seq = datasets::from_synth(&generator, self.frames);
+        let cache = synth::cache_dir_from_env();
+        let mut seq = datasets::from_synth_cached(&generator, self.frames, cache.as_deref());
         seq.name = self.label();
         Ok(seq)
     }

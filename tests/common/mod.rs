@@ -6,10 +6,22 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+/// The frame cache the tests' processes share, as the environment variable that names it
+/// (`target/tmp/synth-frames`): a synthetic frame is a pure function of the renderer's code, the
+/// configuration, the seed and the index, so the many runs of the same few sequences render
+/// each frame once (`synth::CachedFrames`; synth's own tests render without it).
+pub fn synth_cache_env() -> (&'static str, &'static str) {
+    (
+        synth::CACHE_ENV,
+        concat!(env!("CARGO_TARGET_TMPDIR"), "/synth-frames"),
+    )
+}
+
 /// Runs the `noisefree` binary built for these tests with `args`.
 pub fn noisefree(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_noisefree"))
         .args(args)
+        .env(synth_cache_env().0, synth_cache_env().1)
         .output()
         .expect("binary runs")
 }

@@ -31,7 +31,7 @@ pub use catalog::{data_root, Ate, Catalog, Class, Entry, EntryFormat, PaperAte};
 pub use error::DatasetError;
 pub use euroc::{load_euroc, load_euroc_with, open_euroc_with, EurocOptions};
 pub use sequence::{Format, FrameReader, Sequence};
-pub use synthetic::{from_synth, open_synth};
+pub use synthetic::{from_synth, from_synth_cached, open_synth, open_synth_cached};
 pub use tum::{load_tum, load_tum_with, open_tum_with, TumOptions};
 
 use std::path::Path;

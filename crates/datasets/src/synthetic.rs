@@ -13,6 +13,7 @@ use crate::rectify::{RawCamera, StereoRectification};
 use crate::{Format, Sequence};
 use rayon::prelude::*;
 use slam_core::{Camera, Distortion, FrameInput, SensorKind};
+use std::path::Path;
 use std::sync::Arc;
 
 /// The rectification of a generator with a calibrated rig, `None` without one.
@@ -90,9 +91,10 @@ fn depth_factor(gen: &synth::Generator) -> Option<f64> {
         .then(|| gen.config().depth_units_per_metre)
 }
 
-/// Frame `f` as the system gets it: rectified when there is a rig.
-fn input(f: synth::SynthFrame, rect: Option<&StereoRectification>) -> FrameInput {
-    let mut input = f.into_input();
+/// Frame `i` as the system gets it (from the cache when it has it): rectified when there is a
+/// rig.
+fn input(frames: &synth::CachedFrames, i: usize, rect: Option<&StereoRectification>) -> FrameInput {
+    let (mut input, _) = frames.input(i);
     if let Some(r) = rect {
         input.image = Arc::new(r.rectify_left(&input.image));
         input.right = input.right.map(|g| Arc::new(r.rectify_right(&g)));
@@ -116,12 +118,23 @@ fn paired(mut colour: FrameInput, depth: &FrameInput) -> FrameInput {
 /// ([`synth::Generator::stream_pairs`]; every frame with its own images but where a free-running
 /// depth stream's jitter makes a frame borrow a depth image or drop out).
 pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
+    from_synth_cached(gen, n_frames, None)
+}
+
+/// [`from_synth`] with the frames read from, or rendered into, the frame cache folder `cache`
+/// ([`synth::CachedFrames`]: the same frames, bit for bit).
+pub fn from_synth_cached(
+    gen: &synth::Generator,
+    n_frames: usize,
+    cache: Option<&Path>,
+) -> Sequence {
     let rect = rectification(gen);
     let (camera, t_bs) = geometry(gen, rect.as_ref());
     let rig = rect.is_some();
+    let cached = synth::CachedFrames::new(gen.clone(), cache);
     let rendered: Vec<FrameInput> = (0..n_frames)
         .into_par_iter()
-        .map(|i| input(gen.frame(i), rect.as_ref()))
+        .map(|i| input(&cached, i, rect.as_ref()))
         .collect();
     let frames = gen
         .stream_pairs(n_frames)
@@ -149,6 +162,16 @@ pub fn from_synth(gen: &synth::Generator, n_frames: usize) -> Sequence {
 /// when the reader reads them (the same frames, bit for bit, as [`from_synth`]; a frame that
 /// borrows the next frame's depth renders that frame too).
 pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::FrameReader) {
+    open_synth_cached(gen, n_frames, None)
+}
+
+/// [`open_synth`] with the frames read from, or rendered into, the frame cache folder `cache`
+/// ([`synth::CachedFrames`]: the same frames, bit for bit).
+pub fn open_synth_cached(
+    gen: &synth::Generator,
+    n_frames: usize,
+    cache: Option<&Path>,
+) -> (Sequence, crate::FrameReader) {
     let rect = rectification(gen);
     let (camera, t_bs) = geometry(gen, rect.as_ref());
     let rig = rect.is_some();
@@ -168,16 +191,16 @@ pub fn open_synth(gen: &synth::Generator, n_frames: usize) -> (Sequence, crate::
         rectification: None,
     };
     let pairs = gen.stream_pairs(n_frames);
-    let gen = gen.clone();
+    let cached = synth::CachedFrames::new(gen.clone(), cache);
     let rect = rect.map(Arc::new);
     seq.rectification = rect.clone();
     let frames = crate::FrameReader::new(pairs.len(), move |k| {
         let (i, j) = pairs[k];
-        let colour = input(gen.frame(i), rect.as_deref());
+        let colour = input(&cached, i, rect.as_deref());
         Ok(if j == i {
             colour
         } else {
-            paired(colour, &input(gen.frame(j), rect.as_deref()))
+            paired(colour, &input(&cached, j, rect.as_deref()))
         })
     });
     (seq, frames)

@@ -12,7 +12,8 @@
 //! own folder those it lists above it); `tools/import_graph.py` checks it:
 //! - [`catalog`]: `presets` (the named presets) and `twins` (the paper's sequences) — names
 //!   become specifications;
-//! - [`output`]: `tum`, `euroc` (folder layouts), `contact` (a contact sheet);
+//! - [`output`]: `tum`, `euroc` (folder layouts), `contact` (a contact sheet), `frame_cache`
+//!   (rendered frames shared between processes);
 //! - [`generator`]: random access to the frames of a (specification, seed) sequence;
 //! - [`spec`]: [`SynthConfig`], every stage's options side by side, checked and ablated;
 //! - [`sensor`]: `imaging` (exposure, rolling shutter, vignetting, auto-exposure, sensor
@@ -45,6 +46,7 @@ pub use motion::recorded::RecordedPath;
 pub use motion::trajectory::Trajectory;
 pub use output::contact::{contact_sheet, write_contact_sheet};
 pub use output::euroc::write_euroc;
+pub use output::frame_cache::{cache_dir_from_env, CachedFrames, CACHE_ENV};
 pub use output::tum::write_tum;
 pub use sensor::depth::{
     AxialNoise, BlobHoles, DepthLag, DepthNoise, DisparityQuantisation, FlyingPixels, Holes,

@@ -38,8 +38,15 @@ pub struct Rendered {
 /// Renders `n` frames of `synth_cfg` with `seed`, on as many threads as there are cores (each
 /// frame is a pure function of the configuration, seed and index, so the bytes do not depend on
 /// the split).
+///
+/// The frames go through the frame cache the workspace's test processes share
+/// (`target/tmp/synth-frames`, [`synth::CachedFrames`]): the same bits as rendering them, each
+/// rendered once however many suites use it.
 pub fn render(synth_cfg: SynthConfig, seed: u64, n: usize) -> Rendered {
     let gen = Generator::new(synth_cfg, seed);
+    let camera = gen.camera();
+    let cache = std::path::Path::new(concat!(env!("CARGO_TARGET_TMPDIR"), "/synth-frames"));
+    let gen = synth::CachedFrames::new(gen, Some(cache));
     let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
     let chunk = n.div_ceil(threads).max(1);
     let rendered: Vec<(FrameInput, Isometry3<f64>)> = std::thread::scope(|s| {
@@ -49,11 +56,7 @@ pub fn render(synth_cfg: SynthConfig, seed: u64, n: usize) -> Rendered {
             .map(|start| {
                 s.spawn(move || {
                     (start..(start + chunk).min(n))
-                        .map(|i| {
-                            let f = gen.frame(i);
-                            let pose_wc = f.pose_wc;
-                            (f.into_input(), pose_wc)
-                        })
+                        .map(|i| gen.input(i))
                         .collect::<Vec<_>>()
                 })
             })
@@ -65,7 +68,7 @@ pub fn render(synth_cfg: SynthConfig, seed: u64, n: usize) -> Rendered {
     });
     let (frames, truth) = rendered.into_iter().unzip();
     Rendered {
-        camera: gen.camera(),
+        camera,
         frames,
         truth,
     }

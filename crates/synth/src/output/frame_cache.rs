@@ -1,0 +1,513 @@
+//! A folder of rendered frames that processes share: a frame is a pure function of the
+//! renderer's code, the configuration, the seed and the frame index, so a process that needs a
+//! frame another process (or an earlier run) rendered can read it instead of rendering it
+//! again. What is kept is what a SLAM system is given of the frame (grey image, measured depth,
+//! right image, stamp) and its exact pose, bit for bit.
+//!
+//! Files live in a subfolder named by the code ([`CODE_FINGERPRINT`]: the sources of this crate
+//! and slam-core, the manifests and Cargo.lock, fixed at build time); the first process of a
+//! new build removes the subfolders of other builds, so a cache holds one build's frames (about
+//! 0.9 MB a 640 x 480 RGB-D frame). Each file is named by a key of the code, the machine's
+//! architecture, the seed and the whole configuration, and by the frame index; it carries the
+//! key again and a checksum. A file that is missing, truncated, corrupt or of another key is
+//! ignored: the frame is rendered and the file written anew (to a temporary name, then renamed,
+//! so no reader ever sees half a file). Nothing here is required: without a folder every frame
+//! is rendered, and a folder that cannot be written only costs the renders.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use slam_core::{DepthImage, FrameInput, GrayImage};
+
+use crate::generator::Generator;
+
+/// The fingerprint of the rendering code this build was compiled from (see the module doc).
+pub const CODE_FINGERPRINT: &str = env!("SYNTH_CODE_FINGERPRINT");
+
+/// The environment variable naming a frame-cache folder for the command-line tool (unset: no
+/// cache). The test suites set it so that their processes share renders.
+pub const CACHE_ENV: &str = "NOISEFREE_SYNTH_CACHE";
+
+/// The folder named by [`CACHE_ENV`], when it is set and not empty.
+pub fn cache_dir_from_env() -> Option<PathBuf> {
+    std::env::var_os(CACHE_ENV)
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
+}
+
+/// First bytes of a cached frame file.
+const MAGIC: &[u8; 8] = b"NFSYNTH1";
+
+/// A generator's frames as a SLAM system gets them, read from a cache folder when they are
+/// there and rendered (and stored there) when not.
+#[derive(Clone, Debug)]
+pub struct CachedFrames {
+    gen: Generator,
+    dir: Option<Arc<PathBuf>>,
+    key: u64,
+}
+
+impl CachedFrames {
+    /// The frames of `gen`, cached in `dir` (`None`: always rendered). The frames of other
+    /// builds of the renderer are removed from `dir` when this build first uses it.
+    pub fn new(gen: Generator, dir: Option<&Path>) -> Self {
+        let key = dir.map_or(0, |_| generator_key(&gen));
+        CachedFrames {
+            gen,
+            dir: dir.map(|d| Arc::new(build_folder(d))),
+            key,
+        }
+    }
+
+    /// The generator.
+    pub fn generator(&self) -> &Generator {
+        &self.gen
+    }
+
+    /// Frame `index` as a SLAM system is given it (what [`crate::SynthFrame::into_input`]
+    /// keeps) and its exact camera-to-world pose: the same bits whether read or rendered.
+    pub fn input(&self, index: usize) -> (FrameInput, Isometry3<f64>) {
+        let Some(dir) = &self.dir else {
+            return rendered(&self.gen, index);
+        };
+        let path = dir.join(format!("{:016x}-{index}.frame", self.key));
+        if let Some(frame) = std::fs::read(&path)
+            .ok()
+            .and_then(|b| decode(&b, self.key, index))
+        {
+            return frame;
+        }
+        let (input, pose) = rendered(&self.gen, index);
+        let units = self.gen.config().depth_units_per_metre;
+        // Best effort: a folder that cannot be written costs renders, not results.
+        let _ = write_atomic(dir, &path, &encode(self.key, index, &input, &pose, units));
+        (input, pose)
+    }
+}
+
+/// This build's subfolder of the cache folder `dir`; made, and the other builds' subfolders
+/// removed, when it is not there yet (best effort: what cannot be removed stays).
+fn build_folder(dir: &Path) -> PathBuf {
+    let own = dir.join(CODE_FINGERPRINT);
+    if own.is_dir() {
+        return own;
+    }
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries.flatten() {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            let a_build = name.len() == 16 && name.bytes().all(|b| b.is_ascii_hexdigit());
+            if a_build && e.path().is_dir() {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
+    let _ = std::fs::create_dir_all(&own);
+    own
+}
+
+/// The frame rendered.
+fn rendered(gen: &Generator, index: usize) -> (FrameInput, Isometry3<f64>) {
+    let frame = gen.frame(index);
+    let pose = frame.pose_wc;
+    (frame.into_input(), pose)
+}
+
+/// FNV-1a over `bytes`, continuing from `h`.
+fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// The key of `gen`'s frames: code, architecture, seed and configuration (its `Debug` form
+/// prints every field, floats in their shortest round-trip form).
+fn generator_key(gen: &Generator) -> u64 {
+    let mut h = fnv1a(FNV_OFFSET, CODE_FINGERPRINT.as_bytes());
+    h = fnv1a(h, std::env::consts::ARCH.as_bytes());
+    h = fnv1a(h, &gen.seed().to_le_bytes());
+    fnv1a(h, format!("{:?}", gen.config()).as_bytes())
+}
+
+/// Writes `bytes` to `path` through a temporary file in `dir`.
+fn write_atomic(dir: &Path, path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    std::fs::create_dir_all(dir)?;
+    let tmp = path.with_extension(format!(
+        "{}-{}.tmp",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// How a depth image is stored: as the 16-bit units the generator quantised it to when every
+/// pixel comes back bit for bit from them, else as its f32 values.
+const DEPTH_NONE: u8 = 0;
+const DEPTH_UNITS: u8 = 1;
+const DEPTH_F32: u8 = 2;
+
+/// Depth `d` as the unit count `k` that `(k / units) as f32` gives back exactly (0: a hole).
+fn depth_units(d: f32, units: f64) -> Option<u16> {
+    if d.to_bits() == 0 {
+        return Some(0);
+    }
+    let k = (f64::from(d) * units).round();
+    if !(1.0..=65535.0).contains(&k) {
+        return None;
+    }
+    ((k / units) as f32)
+        .to_bits()
+        .eq(&d.to_bits())
+        .then_some(k as u16)
+}
+
+/// The file of one frame.
+fn encode(
+    key: u64,
+    index: usize,
+    input: &FrameInput,
+    pose: &Isometry3<f64>,
+    units: f64,
+) -> Vec<u8> {
+    let mut b = Vec::with_capacity(input.image.data.len() * 4 + 256);
+    b.extend_from_slice(MAGIC);
+    b.extend_from_slice(&key.to_le_bytes());
+    b.extend_from_slice(&(index as u64).to_le_bytes());
+    b.extend_from_slice(&input.timestamp.to_le_bytes());
+    let t = pose.translation.vector;
+    let q = pose.rotation.coords;
+    for x in [t.x, t.y, t.z, q[0], q[1], q[2], q[3]] {
+        b.extend_from_slice(&x.to_le_bytes());
+    }
+    let gray = |b: &mut Vec<u8>, g: &GrayImage| {
+        b.extend_from_slice(&(g.width as u32).to_le_bytes());
+        b.extend_from_slice(&(g.height as u32).to_le_bytes());
+        b.extend_from_slice(&g.data);
+    };
+    gray(&mut b, &input.image);
+    match &input.depth {
+        None => b.push(DEPTH_NONE),
+        Some(d) => {
+            let as_units: Option<Vec<u16>> =
+                d.data.iter().map(|&z| depth_units(z, units)).collect();
+            b.push(if as_units.is_some() {
+                DEPTH_UNITS
+            } else {
+                DEPTH_F32
+            });
+            b.extend_from_slice(&(d.width as u32).to_le_bytes());
+            b.extend_from_slice(&(d.height as u32).to_le_bytes());
+            match as_units {
+                Some(k) => {
+                    b.extend_from_slice(&units.to_le_bytes());
+                    k.iter().for_each(|k| b.extend_from_slice(&k.to_le_bytes()));
+                }
+                None => d
+                    .data
+                    .iter()
+                    .for_each(|z| b.extend_from_slice(&z.to_le_bytes())),
+            }
+        }
+    }
+    match &input.right {
+        None => b.push(0),
+        Some(r) => {
+            b.push(1);
+            gray(&mut b, r);
+        }
+    }
+    let sum = fnv1a(FNV_OFFSET, &b);
+    b.extend_from_slice(&sum.to_le_bytes());
+    b
+}
+
+/// Reads the file of frame `index` of key `key`; `None` unless it is whole and that frame's.
+fn decode(bytes: &[u8], key: u64, index: usize) -> Option<(FrameInput, Isometry3<f64>)> {
+    let (body, sum) = bytes.split_at_checked(bytes.len().checked_sub(8)?)?;
+    if fnv1a(FNV_OFFSET, body) != u64::from_le_bytes(sum.try_into().ok()?) {
+        return None;
+    }
+    let mut r = Reader(body);
+    if r.take(8)? != MAGIC || r.u64()? != key || r.u64()? != index as u64 {
+        return None;
+    }
+    let timestamp = r.f64()?;
+    let mut p = [0.0; 7];
+    for x in &mut p {
+        *x = r.f64()?;
+    }
+    let pose = Isometry3::from_parts(
+        Translation3::new(p[0], p[1], p[2]),
+        UnitQuaternion::new_unchecked(Quaternion::new(p[6], p[3], p[4], p[5])),
+    );
+    let image = r.gray()?;
+    let depth = match r.take(1)?[0] {
+        DEPTH_NONE => None,
+        tag @ (DEPTH_UNITS | DEPTH_F32) => {
+            let (width, height) = r.size()?;
+            let data = if tag == DEPTH_UNITS {
+                let units = r.f64()?;
+                r.take(width * height * 2)?
+                    .chunks_exact(2)
+                    .map(|k| (f64::from(u16::from_le_bytes([k[0], k[1]])) / units) as f32)
+                    .collect()
+            } else {
+                r.take(width * height * 4)?
+                    .chunks_exact(4)
+                    .map(|z| f32::from_le_bytes([z[0], z[1], z[2], z[3]]))
+                    .collect()
+            };
+            Some(Arc::new(DepthImage {
+                width,
+                height,
+                data,
+            }))
+        }
+        _ => return None,
+    };
+    let right = match r.take(1)?[0] {
+        0 => None,
+        1 => Some(Arc::new(r.gray()?)),
+        _ => return None,
+    };
+    if !r.0.is_empty() {
+        return None;
+    }
+    let input = FrameInput {
+        timestamp,
+        image: Arc::new(image),
+        depth,
+        right,
+    };
+    Some((input, pose))
+}
+
+/// A cursor over a file's bytes.
+struct Reader<'a>(&'a [u8]);
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+        let (head, rest) = self.0.split_at_checked(n)?;
+        self.0 = rest;
+        Some(head)
+    }
+
+    fn u64(&mut self) -> Option<u64> {
+        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
+    }
+
+    fn f64(&mut self) -> Option<f64> {
+        Some(f64::from_bits(self.u64()?))
+    }
+
+    fn size(&mut self) -> Option<(usize, usize)> {
+        let w = u32::from_le_bytes(self.take(4)?.try_into().ok()?) as usize;
+        let h = u32::from_le_bytes(self.take(4)?.try_into().ok()?) as usize;
+        Some((w, h))
+    }
+
+    fn gray(&mut self) -> Option<GrayImage> {
+        let (width, height) = self.size()?;
+        let data = self.take(width.checked_mul(height)?)?.to_vec();
+        Some(GrayImage {
+            width,
+            height,
+            data,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SynthConfig;
+
+    fn same(a: &(FrameInput, Isometry3<f64>), b: &(FrameInput, Isometry3<f64>)) {
+        assert_eq!(a.0.timestamp.to_bits(), b.0.timestamp.to_bits());
+        assert_eq!(a.0.image.data, b.0.image.data);
+        assert_eq!(
+            (a.0.image.width, a.0.image.height),
+            (b.0.image.width, b.0.image.height)
+        );
+        let bits = |d: &Option<Arc<DepthImage>>| {
+            d.as_ref().map(|d| {
+                (
+                    d.width,
+                    d.height,
+                    d.data.iter().map(|z| z.to_bits()).collect::<Vec<_>>(),
+                )
+            })
+        };
+        assert_eq!(bits(&a.0.depth), bits(&b.0.depth));
+        assert_eq!(
+            a.0.right.as_ref().map(|r| r.data.clone()),
+            b.0.right.as_ref().map(|r| r.data.clone())
+        );
+        let pose = |p: &Isometry3<f64>| {
+            let t = p.translation.vector;
+            let q = p.rotation.coords;
+            [t.x, t.y, t.z, q[0], q[1], q[2], q[3]].map(f64::to_bits)
+        };
+        assert_eq!(pose(&a.1), pose(&b.1));
+    }
+
+    /// Small frames of a preset, so that the test renders in milliseconds.
+    fn small(preset: &str) -> Generator {
+        let mut cfg = SynthConfig::preset(preset).unwrap();
+        let c = &mut cfg.camera;
+        (c.width, c.height) = (c.width / 8, c.height / 8);
+        for x in [&mut c.fx, &mut c.fy, &mut c.cx, &mut c.cy, &mut c.bf] {
+            *x /= 8.0;
+        }
+        Generator::new(cfg, 3)
+    }
+
+    #[test]
+    fn a_cached_frame_is_the_rendered_frame_bit_for_bit() {
+        let dir = tempfile::tempdir().unwrap();
+        // Depth (quantised to the PNG's units as every preset does: stored as units) and a
+        // stereo pair.
+        for preset in ["kinect", "clean", "stereo"] {
+            let gen = small(preset);
+            let plain = CachedFrames::new(gen.clone(), None);
+            let cached = CachedFrames::new(gen.clone(), Some(dir.path()));
+            for i in [0, 7] {
+                let fresh = plain.input(i);
+                let first = cached.input(i); // rendered, then written
+                let again = cached.input(i); // read
+                same(&fresh, &first);
+                same(&fresh, &again);
+                let path = cached
+                    .dir
+                    .as_ref()
+                    .unwrap()
+                    .join(format!("{:016x}-{i}.frame", cached.key));
+                let bytes = std::fs::read(&path).unwrap();
+                // The depth tag follows the header (88 bytes) and the grey image (8 + w h).
+                let img = &fresh.0.image;
+                let tag = bytes[88 + 8 + img.width * img.height];
+                let expected = match preset {
+                    "stereo" => DEPTH_NONE,
+                    _ => DEPTH_UNITS,
+                };
+                assert_eq!(tag, expected, "{preset}: depth stored as {tag}");
+            }
+        }
+    }
+
+    #[test]
+    fn depth_off_the_units_is_kept_as_it_is() {
+        let image = Arc::new(GrayImage {
+            width: 3,
+            height: 2,
+            data: vec![1, 2, 3, 4, 5, 6],
+        });
+        let pose = Isometry3::translation(0.1, -0.2, 0.3);
+        // Quantised depth with one value between units, a negative zero and a NaN.
+        let depth = DepthImage {
+            width: 3,
+            height: 2,
+            data: vec![
+                1.0,
+                0.0,
+                (1234.0f64 / 5000.0) as f32,
+                0.2469,
+                -0.0,
+                f32::NAN,
+            ],
+        };
+        let input = FrameInput {
+            timestamp: 12.5,
+            image,
+            depth: Some(Arc::new(depth)),
+            right: None,
+        };
+        let bytes = encode(7, 1, &input, &pose, 5000.0);
+        assert_eq!(bytes[88 + 8 + 6], DEPTH_F32);
+        same(&decode(&bytes, 7, 1).unwrap(), &(input.clone(), pose));
+        // On the units but for the last three: stored as units.
+        let mut on_units = input.clone();
+        on_units.depth = Some(Arc::new(DepthImage {
+            width: 3,
+            height: 1,
+            data: vec![1.0, 0.0, (1234.0f64 / 5000.0) as f32],
+        }));
+        let bytes = encode(7, 1, &on_units, &pose, 5000.0);
+        assert_eq!(bytes[88 + 8 + 6], DEPTH_UNITS);
+        same(&decode(&bytes, 7, 1).unwrap(), &(on_units, pose));
+    }
+
+    #[test]
+    fn a_damaged_or_foreign_file_is_rendered_again() {
+        let dir = tempfile::tempdir().unwrap();
+        let gen = small("kinect");
+        let cached = CachedFrames::new(gen.clone(), Some(dir.path()));
+        let fresh = CachedFrames::new(gen.clone(), None).input(2);
+        let path = cached
+            .dir
+            .as_ref()
+            .unwrap()
+            .join(format!("{:016x}-2.frame", cached.key));
+        cached.input(2);
+        let whole = std::fs::read(&path).unwrap();
+        assert!(decode(&whole, cached.key, 2).is_some());
+        // Truncated, a flipped byte, another frame's file, another key: not read.
+        assert!(decode(&whole[..whole.len() - 9], cached.key, 2).is_none());
+        let mut flipped = whole.clone();
+        flipped[200] ^= 1;
+        assert!(decode(&flipped, cached.key, 2).is_none());
+        assert!(decode(&whole, cached.key, 3).is_none());
+        assert!(decode(&whole, cached.key ^ 1, 2).is_none());
+        // A damaged file on disk is replaced by the frame rendered again.
+        std::fs::write(&path, &flipped).unwrap();
+        same(&cached.input(2), &fresh);
+        assert_eq!(std::fs::read(&path).unwrap(), whole);
+    }
+
+    #[test]
+    fn a_new_build_removes_the_frames_of_the_builds_before_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let old_build = dir.path().join("0123456789abcdef");
+        std::fs::create_dir_all(&old_build).unwrap();
+        std::fs::write(old_build.join("0000000000000000-0.frame"), b"old").unwrap();
+        let not_ours = dir.path().join("notes");
+        std::fs::create_dir_all(&not_ours).unwrap();
+        let cached = CachedFrames::new(small("kinect"), Some(dir.path()));
+        assert!(!old_build.exists(), "another build's frames removed");
+        assert!(not_ours.is_dir(), "what is not a build's folder stays");
+        assert_eq!(
+            cached.dir.as_deref(),
+            Some(&dir.path().join(CODE_FINGERPRINT))
+        );
+        cached.input(0);
+        // This build's frames stay for its next processes.
+        let again = CachedFrames::new(small("kinect"), Some(dir.path()));
+        assert_eq!(
+            std::fs::read_dir(again.dir.as_deref().unwrap())
+                .unwrap()
+                .count(),
+            1
+        );
+    }
+
+    #[test]
+    fn the_key_follows_seed_and_configuration() {
+        let gen = small("kinect");
+        let key = generator_key(&gen);
+        assert_eq!(key, generator_key(&gen.clone()));
+        assert_ne!(key, generator_key(&Generator::new(gen.config().clone(), 4)));
+        let mut cfg = gen.config().clone();
+        cfg.image.noise_sigma += 1e-12;
+        assert_ne!(key, generator_key(&Generator::new(cfg, 3)));
+    }
+}
