@@ -136,3 +136,63 @@ fn mapping_lag_makes_seeded_runs_differ() {
     assert_ne!(a, b);
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `NOISEFREE_SYNTH_CACHE`: the first run renders its frames into the folder, the second reads
+/// them, and both write the trajectory of a run without the cache, byte for byte.
+#[test]
+fn the_frame_cache_gives_the_trajectory_of_rendering() {
+    let cache = tmpdir("frame-cache");
+    let run = |out: &std::path::Path, cache: Option<&std::path::Path>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_noisefree"));
+        cmd.args([
+            "run",
+            "--seq",
+            "walking",
+            "--frames",
+            "12",
+            "--synth-seed",
+            "7",
+        ])
+        .args(["--quiet", "--out", out.to_str().unwrap()]);
+        match cache {
+            Some(c) => cmd.env(synth::CACHE_ENV, c),
+            None => cmd.env_remove(synth::CACHE_ENV),
+        };
+        let o = cmd.output().expect("binary runs");
+        common::assert_ok(&o);
+        std::fs::read(out.join("trajectory.txt")).unwrap()
+    };
+    let plain = run(&tmpdir("cache-plain"), None);
+    let first = run(&tmpdir("cache-first"), Some(&cache));
+    // One build folder holding the 12 frames (and the frame a depth image may borrow).
+    let builds: Vec<_> = std::fs::read_dir(&cache).unwrap().flatten().collect();
+    assert_eq!(builds.len(), 1, "one build's folder");
+    let files: Vec<_> = std::fs::read_dir(builds[0].path())
+        .unwrap()
+        .flatten()
+        .collect();
+    assert!(
+        (12..=13).contains(&files.len()),
+        "{} frames cached",
+        files.len()
+    );
+    let stamps = |files: &[std::fs::DirEntry]| -> Vec<std::time::SystemTime> {
+        files
+            .iter()
+            .map(|f| f.metadata().unwrap().modified().unwrap())
+            .collect()
+    };
+    let written = stamps(&files);
+    let second = run(&tmpdir("cache-second"), Some(&cache));
+    assert_eq!(stamps(&files), written, "the second run read, not rewrote");
+    assert_eq!(first, plain, "rendered through the cache: the same bytes");
+    assert_eq!(second, plain, "read from the cache: the same bytes");
+    // A frame damaged on disk is rendered again: still the same trajectory.
+    let victim = files[0].path();
+    let mut bytes = std::fs::read(&victim).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    std::fs::write(&victim, &bytes).unwrap();
+    assert_eq!(run(&tmpdir("cache-third"), Some(&cache)), plain);
+    let _ = std::fs::remove_dir_all(&cache);
+}
