@@ -423,8 +423,12 @@ pub fn format_kitti(traj: &Trajectory) -> String {
     s
 }
 
-/// Writes `contents` to `path` atomically: a temporary file beside it, then a rename.
+/// Writes `contents` to `path` atomically: a temporary file beside it, then a rename. The
+/// temporary name is the writer's own (process and call), so threads or processes writing the
+/// same path at once never write into one temporary file; a temporary file that cannot be
+/// written whole or renamed is removed.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let io_err = |source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -433,13 +437,22 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(io_err)?;
     }
     let mut tmp = path.as_os_str().to_owned();
-    tmp.push(format!(".tmp{}", std::process::id()));
+    tmp.push(format!(
+        ".tmp{}-{}",
+        std::process::id(),
+        CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
     let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, contents).map_err(|source| Error::Io {
-        path: tmp.clone(),
-        source,
-    })?;
-    std::fs::rename(&tmp, path).map_err(io_err)
+    let written = std::fs::write(&tmp, contents)
+        .map_err(|source| Error::Io {
+            path: tmp.clone(),
+            source,
+        })
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(io_err));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
 }
 
 /// Writes a TUM trajectory atomically.
@@ -506,6 +519,29 @@ pub fn read_euroc_t_bs(path: &Path) -> Result<Isometry3<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn writers_of_one_path_at_once_each_write_a_whole_file() {
+        let dir = std::env::temp_dir().join(format!("ate-eval-atomic-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let path = dir.join("out.bin");
+        let contents: Vec<Vec<u8>> = (0..8u8).map(|k| vec![k; 1 << 20]).collect();
+        std::thread::scope(|s| {
+            for c in &contents {
+                let path = &path;
+                s.spawn(move || {
+                    for _ in 0..4 {
+                        write_atomic(path, c).expect("every write succeeds");
+                    }
+                });
+            }
+        });
+        let written = std::fs::read(&path).unwrap();
+        assert!(contents.contains(&written), "one writer's whole file");
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
+        assert_eq!(left.len(), 1, "no temporary file left behind");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     fn tmp_file(name: &str, contents: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("ate-eval-io-{}", std::process::id()));

@@ -15,7 +15,6 @@
 //! is rendered, and a folder that cannot be written only costs the renders.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
@@ -61,11 +60,6 @@ impl CachedFrames {
         }
     }
 
-    /// The generator.
-    pub fn generator(&self) -> &Generator {
-        &self.gen
-    }
-
     /// Frame `index` as a SLAM system is given it (what [`crate::SynthFrame::into_input`]
     /// keeps) and its exact camera-to-world pose: the same bits whether read or rendered.
     pub fn input(&self, index: usize) -> (FrameInput, Isometry3<f64>) {
@@ -82,7 +76,7 @@ impl CachedFrames {
         let (input, pose) = rendered(&self.gen, index);
         let units = self.gen.config().depth_units_per_metre;
         // Best effort: a folder that cannot be written costs renders, not results.
-        let _ = write_atomic(dir, &path, &encode(self.key, index, &input, &pose, units));
+        let _ = ate_eval::io::write_atomic(&path, &encode(self.key, index, &input, &pose, units));
         (input, pose)
     }
 }
@@ -133,21 +127,6 @@ fn generator_key(gen: &Generator) -> u64 {
     h = fnv1a(h, std::env::consts::ARCH.as_bytes());
     h = fnv1a(h, &gen.seed().to_le_bytes());
     fnv1a(h, format!("{:?}", gen.config()).as_bytes())
-}
-
-/// Writes `bytes` to `path` through a temporary file in `dir`.
-fn write_atomic(dir: &Path, path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    std::fs::create_dir_all(dir)?;
-    let tmp = path.with_extension(format!(
-        "{}-{}.tmp",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
 }
 
 /// How a depth image is stored: as the 16-bit units the generator quantised it to when every
