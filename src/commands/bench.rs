@@ -5,8 +5,16 @@
 //! Features are extracted once, as a sweep does, so the per-configuration figures are the cost
 //! of tracking + local mapping + loop closing alone: the part the paper's techniques change.
 //! Each configuration runs `--repeat` times and keeps its fastest run (the machine may be
-//! shared); the trajectory hash of each run is printed, so a change meant to be exact can be
-//! checked for bit-identical results on the same command.
+//! shared); the repeats go round the configurations in turn (orb, mcor, ..., orb, mcor, ...),
+//! so that a machine that slows down for a while slows every configuration's rounds alike and
+//! the ratios to the baseline stay fair. The trajectory hash of each run is printed, so a change
+//! meant to be exact can be checked for bit-identical results on the same command.
+//!
+//! A configuration with AVC may be written `NAME:direct` (e.g. `avc:direct`): the same run
+//! with `[avc] aim = "direct"`, the documented approximation that places the virtual camera
+//! without the angle's `atan2` / `sin` / `cos` (off by default; see
+//! [`AvcAim`](slam_core::module::noise::AvcAim)), so exact and approximate AVC are timed in one
+//! run.
 
 use crate::commands::sweep::job_config;
 use crate::config_file::{base_config, overlay_file};
@@ -17,6 +25,7 @@ use crate::sweep::plan::{ConfigKind, Job, Params, RunConfig};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::write_atomic;
 use serde::Serialize;
+use slam_core::module::noise::AvcAim;
 use slam_core::system::FrameStats;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -33,15 +42,16 @@ pub struct BenchArgs {
     /// Frames (synthetic: generated; real: the first N).
     #[arg(long, default_value_t = 300, value_name = "N")]
     pub frames: usize,
-    /// Configurations timed one by one, comma-separated.
+    /// Configurations timed, comma-separated; `NAME:direct` is a configuration with AVC under
+    /// the direct-aim approximation (`[avc] aim = "direct"`).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "orb,mcor,avc,mcor+avc,rc",
+        default_value = "orb,mcor,avc,mcor+avc,rc,avc:direct,mcor+avc:direct",
         value_name = "LIST"
     )]
     pub configs: Vec<String>,
-    /// Runs of each configuration; the fastest counts.
+    /// Runs of each configuration (in rounds over the configurations); the fastest counts.
     #[arg(long, default_value_t = 2, value_name = "N")]
     pub repeat: usize,
     /// Seeds of the sweep figure (the paper's four configurations x seeds 0..N on one core);
@@ -111,6 +121,42 @@ fn mean(stats: &[FrameStats], f: fn(&FrameStats) -> f64) -> f64 {
     stats.iter().map(f).sum::<f64>() / stats.len().max(1) as f64
 }
 
+/// One entry of `--configs`: a configuration, and whether its AVC aims directly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct BenchConfig {
+    kind: ConfigKind,
+    direct_aim: bool,
+}
+
+impl BenchConfig {
+    /// Parses `NAME` or `NAME:direct` (only for a configuration with AVC).
+    fn parse(s: &str) -> Result<BenchConfig> {
+        let (name, variant) = match s.trim().split_once(':') {
+            Some((name, variant)) => (name, Some(variant)),
+            None => (s.trim(), None),
+        };
+        let kind = ConfigKind::parse(name)?;
+        let direct_aim = match variant {
+            None => false,
+            Some("direct") if kind.avc() => true,
+            Some("direct") => {
+                bail!("\"{s}\": `:direct` is an approximation of AVC, and {kind} has no AVC")
+            }
+            Some(other) => bail!("\"{s}\": unknown variant \"{other}\" (known: direct)"),
+        };
+        Ok(BenchConfig { kind, direct_aim })
+    }
+
+    /// The column's name: the configuration's, with `:direct` for the approximation.
+    fn name(self) -> String {
+        if self.direct_aim {
+            format!("{}:direct", self.kind.name())
+        } else {
+            self.kind.name().to_string()
+        }
+    }
+}
+
 /// Runs `noisefree bench`.
 pub fn run(args: BenchArgs) -> Result<()> {
     if args.frames == 0 || args.repeat == 0 {
@@ -119,7 +165,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let kinds = args
         .configs
         .iter()
-        .map(|c| ConfigKind::parse(c))
+        .map(|c| BenchConfig::parse(c))
         .collect::<Result<Vec<_>>>()
         .context("--configs")?;
     if kinds.is_empty() {
@@ -174,8 +220,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
         synth_seed: None,
         perturbation: None,
     };
-    let track = |kind: ConfigKind, seed: u64| {
-        let config = job_config(&base, &job(kind, seed));
+    let track = |bench: BenchConfig, seed: u64| {
+        let mut config = job_config(&base, &job(bench.kind, seed));
+        if bench.direct_aim {
+            if let Some(avc) = config.avc.as_mut() {
+                avc.aim = AvcAim::Direct;
+            }
+        }
         let t = Instant::now();
         let o = run_extracted(&seq, &extracted, &config, vocabulary, |_| {});
         (t.elapsed().as_secs_f64(), o)
@@ -185,7 +236,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         let (s, o) = track(kinds[0], 0);
         println!(
             "{label} [{}]: {n} frames tracked in {s:.3} s ({:.1} frames/s), trajectory {}",
-            kinds[0],
+            kinds[0].name(),
             n as f64 / s,
             trajectory_hash(&o.trajectory)
         );
@@ -198,7 +249,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         extraction_s * 1e3 / n as f64
     );
     println!(
-        "{:<10} {:>9} {:>9} {:>8} {:>9} {:>8} {:>8} {:>8}  {:<16} {:>4} {:>6} {:>9}",
+        "{:<16} {:>9} {:>9} {:>8} {:>9} {:>8} {:>8} {:>8}  {:<16} {:>4} {:>6} {:>9}",
         "config",
         "frames/s",
         "of orb",
@@ -212,25 +263,33 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "points",
         "ATE mm"
     );
-    let mut figures = Vec::new();
-    for &kind in &kinds {
-        let mut runs_s = Vec::new();
-        let mut best: Option<(f64, crate::runner::RunOutcome)> = None;
-        let mut hash = None;
-        for _ in 0..args.repeat {
-            let (s, o) = track(kind, 0);
-            let h = trajectory_hash(&o.trajectory);
-            if hash.get_or_insert_with(|| h.clone()) != &h {
-                bail!("{kind}: two runs of the same seed gave different trajectories");
-            }
-            runs_s.push(s);
-            if best.as_ref().is_none_or(|(b, _)| s < *b) {
-                best = Some((s, o));
-            }
+    // Rounds over the configurations: every configuration's repeat r runs in round r.
+    let mut runs: Vec<Vec<(f64, crate::runner::RunOutcome)>> =
+        kinds.iter().map(|_| Vec::new()).collect();
+    for _ in 0..args.repeat {
+        for (&kind, runs) in kinds.iter().zip(&mut runs) {
+            runs.push(track(kind, 0));
         }
-        let (s, o) = best.expect("at least one run");
+    }
+    let mut figures = Vec::new();
+    for (&kind, runs) in kinds.iter().zip(runs) {
+        let hashes: Vec<String> = runs
+            .iter()
+            .map(|(_, o)| trajectory_hash(&o.trajectory))
+            .collect();
+        if hashes.iter().any(|h| h != &hashes[0]) {
+            bail!(
+                "{}: two runs of the same seed gave different trajectories",
+                kind.name()
+            );
+        }
+        let runs_s: Vec<f64> = runs.iter().map(|(s, _)| *s).collect();
+        let (s, o) = runs
+            .into_iter()
+            .reduce(|best, run| if run.0 < best.0 { run } else { best })
+            .expect("at least one run");
         let f = ConfigFigures {
-            config: kind.name().to_string(),
+            config: kind.name(),
             fps: n as f64 / s,
             ms_per_frame: s * 1e3 / n as f64,
             tracking_ms: mean(&o.stats, |x| x.time_tracking_ms),
@@ -238,17 +297,17 @@ pub fn run(args: BenchArgs) -> Result<()> {
             ba_ms: mean(&o.stats, |x| x.time_ba_ms),
             loop_ms: mean(&o.stats, |x| x.time_loop_ms),
             runs_s,
-            hash: hash.expect("at least one run"),
+            hash: hashes[0].clone(),
             keyframes: o.keyframes,
             map_points: o.map_points,
             ate_m: o.ate_rmse(),
         };
-        let orb_fps = figures
-            .iter()
-            .find(|c: &&ConfigFigures| c.config == "orb")
-            .map(|c| c.fps);
+        figures.push(f);
+    }
+    let orb_fps = figures.iter().find(|c| c.config == "orb").map(|c| c.fps);
+    for f in &figures {
         println!(
-            "{:<10} {:>9.1} {:>9} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3}  {:<16} {:>4} {:>6} {:>9}",
+            "{:<16} {:>9.1} {:>9} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3}  {:<16} {:>4} {:>6} {:>9}",
             f.config,
             f.fps,
             orb_fps.map_or("-".to_string(), |b| format!("{:.0} %", 100.0 * f.fps / b)),
@@ -262,7 +321,6 @@ pub fn run(args: BenchArgs) -> Result<()> {
             f.map_points,
             f.ate_m.map_or("-".to_string(), |a| format!("{:.3}", a * 1e3))
         );
-        figures.push(f);
     }
 
     let mut sweep_tracking_s = 0.0;
@@ -270,7 +328,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.sweep_seeds > 0 {
         for seed in 0..args.sweep_seeds {
             for kind in ConfigKind::ALL {
-                sweep_tracking_s += track(kind, seed).0;
+                let paper = BenchConfig {
+                    kind,
+                    direct_aim: false,
+                };
+                sweep_tracking_s += track(paper, seed).0;
                 sweep_runs += 1;
             }
         }
@@ -333,7 +395,10 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("nf-bench-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let json = dir.join("bench.json");
-        let mut a = args(&["orb", "mcor", "avc", "mcor+avc", "rc"], 30);
+        let mut a = args(
+            &["orb", "mcor", "avc", "mcor+avc", "rc", "mcor+avc:direct"],
+            30,
+        );
         a.json = Some(json.clone());
         run(a).unwrap();
         let report: serde_json::Value =
@@ -344,7 +409,10 @@ mod tests {
             .iter()
             .map(|c| c["config"].as_str().unwrap())
             .collect();
-        assert_eq!(names, ["orb", "mcor", "avc", "mcor+avc", "rc"]);
+        assert_eq!(
+            names,
+            ["orb", "mcor", "avc", "mcor+avc", "rc", "mcor+avc:direct"]
+        );
         for c in configs {
             // Two runs each, the fastest kept, the same trajectory (checked by the bench).
             assert_eq!(c["runs_s"].as_array().unwrap().len(), 2);
@@ -367,10 +435,31 @@ mod tests {
     }
 
     #[test]
+    fn a_direct_variant_is_the_configuration_with_avc_aimed_directly() {
+        let c = BenchConfig::parse(" mcor+avc:direct").unwrap();
+        assert_eq!(c.kind, ConfigKind::McorAvc);
+        assert!(c.direct_aim);
+        assert_eq!(c.name(), "mcor+avc:direct");
+        let c = BenchConfig::parse("avc").unwrap();
+        assert!(!c.direct_aim);
+        assert_eq!(c.name(), "avc");
+    }
+
+    #[test]
     fn bad_arguments_are_refused_before_anything_runs() {
         let e = run(args(&["orb", "mcorr"], 40)).unwrap_err();
         assert!(
             format!("{e:#}").contains("unknown configuration \"mcorr\""),
+            "{e:#}"
+        );
+        let e = run(args(&["orb", "orb:direct"], 40)).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("\"orb:direct\": `:direct` is an approximation of AVC"),
+            "{e:#}"
+        );
+        let e = run(args(&["avc:fast"], 40)).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("unknown variant \"fast\""),
             "{e:#}"
         );
         let e = run(args(&["orb"], 0)).unwrap_err();
