@@ -77,6 +77,12 @@ pub fn measurement_for(
     if let Some(r) = avc_residual_for(camera, features, i, hooks, estimate) {
         return Measurement::VirtualCamera(VirtualCameraRef::single(r));
     }
+    builtin_measurement(features, i)
+}
+
+/// The baseline's measurement of keypoint `i`: the 3-D residual with a right coordinate, else
+/// the 2-D one.
+fn builtin_measurement(features: &Features, i: usize) -> Measurement {
     let kp = &features.keypoints[i];
     match features.u_right_of(i) {
         Some(ur) => Measurement::Stereo {
@@ -99,8 +105,8 @@ fn avc_residual_for(
     hooks: &NoiseHooks,
     estimate: &Vector3<f64>,
 ) -> Option<VirtualCameraResidual> {
+    let depth = avc_depth(features, i, hooks)?;
     let avc = hooks.avc?;
-    let depth = features.depth_of(i)?;
     let kp = &features.keypoints[i];
     VirtualCameraResidual::with_aim_from(
         camera,
@@ -111,6 +117,15 @@ fn avc_residual_for(
         avc.aim,
         estimate,
     )
+}
+
+/// The measured depth of keypoint `i` when AVC is on and gives it its residual (a measured
+/// depth, a valid baseline): exactly when [`avc_residual_for`] builds one.
+fn avc_depth(features: &Features, i: usize, hooks: &NoiseHooks) -> Option<f64> {
+    let avc = hooks.avc?;
+    features
+        .depth_of(i)
+        .filter(|&depth| VirtualCameraResidual::is_defined(depth, avc.baseline))
 }
 
 /// The MC-OR cluster of map point `mp`: every observing (good) keyframe's keypoint with a
@@ -403,25 +418,23 @@ pub fn optimize_frame_pose(
     let Some(initial) = frame.tcw else {
         return PoseOptCounts::default();
     };
-    let mut obs = Vec::new();
-    let mut index = Vec::new();
-    // The AVC residuals, built into one set (one allocation), and the observation of each.
-    let mut avc_residuals = Vec::with_capacity(if hooks.avc.is_some() { frame.len() } else { 0 });
-    let mut avc_at = Vec::new();
+    let mut obs = Vec::with_capacity(frame.len());
+    let mut index = Vec::with_capacity(frame.len());
+    // The observations that get an AVC residual, with their keypoint's depth: their residuals
+    // are built below into one set, in place (one allocation, nothing copied).
+    let mut avc_at: Vec<(usize, f64)> = Vec::new();
     for i in 0..frame.len() {
         let Some(mp) = frame.map_points[i].and_then(|id| map.map_point(id)) else {
             continue;
         };
         frame.outliers[i] = false;
-        let estimate = (initial * Point3::from(mp.position)).coords;
-        let measurement = match avc_residual_for(camera, &frame.features, i, hooks, &estimate) {
-            Some(r) => {
-                avc_residuals.push(r);
-                avc_at.push(obs.len());
+        let measurement = match avc_depth(&frame.features, i, hooks) {
+            Some(depth) => {
+                avc_at.push((obs.len(), depth));
                 // Replaced by the residual's place in the set below.
                 Measurement::Mono { u: 0.0, v: 0.0 }
             }
-            None => measurement_for(camera, &frame.features, i, hooks, &estimate),
+            None => builtin_measurement(&frame.features, i),
         };
         obs.push(PoseObservation {
             point_world: mp.position,
@@ -430,8 +443,27 @@ pub fn optimize_frame_pose(
         });
         index.push(i);
     }
-    let avc: Arc<[VirtualCameraResidual]> = avc_residuals.into();
-    for (n, &k) in avc_at.iter().enumerate() {
+    let avc: Arc<[VirtualCameraResidual]> = match hooks.avc {
+        Some(params) => avc_at
+            .iter()
+            .map(|&(k, depth)| {
+                let kp = &frame.features.keypoints[index[k]];
+                let estimate = (initial * Point3::from(obs[k].point_world)).coords;
+                VirtualCameraResidual::with_aim_from(
+                    camera,
+                    kp.x as f64,
+                    kp.y as f64,
+                    depth,
+                    params.baseline,
+                    params.aim,
+                    &estimate,
+                )
+                .expect("avc_depth admits what the residual accepts")
+            })
+            .collect(),
+        None => Arc::new([]),
+    };
+    for (n, &(k, _)) in avc_at.iter().enumerate() {
         let r = VirtualCameraRef::new(&avc, n).expect("one residual per AVC observation");
         obs[k].measurement = Measurement::VirtualCamera(r);
     }
@@ -522,7 +554,7 @@ pub fn optimize_frame_pose(
         // then re-run MC-OR (an observation rejected at a poor early pose may come back).
         let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
             if aimed_from.get() != Some(pose_bits(pose)) {
-                for (r, &k) in avc.iter().zip(&avc_at) {
+                for (r, &(k, _)) in avc.iter().zip(&avc_at) {
                     r.aim_at(&(pose * Point3::from(obs[k].point_world)).coords);
                 }
                 aimed_from.set(Some(pose_bits(pose)));
@@ -540,14 +572,12 @@ pub fn optimize_frame_pose(
                 memo.moves(&twc);
                 let mut verdicts = Vec::new();
                 last_gate = (0, 0);
-                for (k, e) in excluded.iter_mut().enumerate() {
-                    let key = (index[k], cluster_of[k]);
-                    let verdict = memo.verdict(key, gated_norm[k], || {
-                        shared.cluster(cluster_of[k]).verdict_with_reach(
-                            params,
-                            &twc,
-                            gated[k].as_ref(),
-                        )
+                let matches = index.iter().zip(&cluster_of).zip(&gated).zip(&gated_norm);
+                for (e, (((&i, &id), p), &p_norm)) in excluded.iter_mut().zip(matches) {
+                    let verdict = memo.verdict((i, id), p_norm, || {
+                        shared
+                            .cluster(id)
+                            .verdict_with_reach(params, &twc, p.as_ref())
                     });
                     match verdict {
                         McorVerdict::RejectedCluster => last_gate.0 += 1,

@@ -123,7 +123,7 @@ impl VirtualCameraResidual {
         aim: AvcAim,
         estimate: &Vector3<f64>,
     ) -> Option<Self> {
-        if !(depth > 0.0 && depth.is_finite() && baseline > 0.0 && baseline.is_finite()) {
+        if !Self::is_defined(depth, baseline) {
             return None;
         }
         let measured_point = camera.unproject(u, v, depth);
@@ -139,6 +139,12 @@ impl VirtualCameraResidual {
         };
         residual.aim_at(estimate);
         Some(residual)
+    }
+
+    /// Whether a residual exists for measured depth `depth` and baseline `baseline` (metres):
+    /// both finite and positive. [`with_aim_from`](Self::with_aim_from) builds one exactly then.
+    pub fn is_defined(depth: f64, baseline: f64) -> bool {
+        depth > 0.0 && depth.is_finite() && baseline > 0.0 && baseline.is_finite()
     }
 
     /// The residual placing its virtual camera by `aim` (re-aimed from `estimate`).
