@@ -438,6 +438,7 @@ fn exact_metrics(
 mod tests {
     use super::*;
     use crate::techniques::mcor::{mcor_gate, McorCluster, McorMatch};
+    use crate::techniques::mcor_views::FRAME_VIEW_SOURCE_BIT;
     use crate::techniques::test_support::{gaussian, rng};
     use nalgebra::{Translation3, UnitQuaternion};
     use rand::Rng;
@@ -484,6 +485,75 @@ mod tests {
     /// A random gated match, trial `trial`: a cluster of up to `max_n` features (built both
     /// ways, `folded` of them folded), the frame pose, and the current feature (camera frame;
     /// none every fifth trial) near the cluster's centre; with the centre.
+    /// A cluster that takes 100 frame views one at a time (its views folding past
+    /// [`MCOR_CLUSTER_CAPACITY`]) is, after every view, the cluster built afresh from the same
+    /// features: the same features, sums and ring bit for bit, and the same verdicts.
+    #[test]
+    fn views_pushed_one_by_one_give_the_cluster_built_afresh() {
+        let mut g = rng(43);
+        let twc = Isometry3::from_parts(
+            Translation3::new(0.1, -0.05, 0.2),
+            UnitQuaternion::from_euler_angles(0.01, 0.03, -0.02),
+        );
+        let m = Vector3::new(0.2, -0.1, 2.5);
+        let feature = |g: &mut rand_chacha::ChaCha8Rng, source: u64| {
+            let p = Vector3::new(
+                gaussian(g) * 0.05,
+                gaussian(g) * 0.05,
+                2.0 + gaussian(g) * 0.05,
+            );
+            ClusterFeature::new(source, p, &twc).expect("in front")
+        };
+        for n_keyframe in [0usize, 3, 40] {
+            let keyframes: Vec<ClusterFeature> =
+                (0..n_keyframe as u64).map(|k| feature(&mut g, k)).collect();
+            let mut incremental = PreparedCluster::new(m);
+            for f in &keyframes {
+                incremental.push(f);
+            }
+            incremental.add_folded(Vector3::zeros(), 0);
+            incremental.seal();
+            // What `FrameViews` keeps: the recent views and the sum of those folded out.
+            let mut recent: std::collections::VecDeque<ClusterFeature> = Default::default();
+            let (mut folded_sum, mut folded_count) = (Vector3::zeros(), 0u64);
+            for v in 0..100u64 {
+                let view = feature(&mut g, FRAME_VIEW_SOURCE_BIT | v);
+                if recent.len() == MCOR_CLUSTER_CAPACITY {
+                    let old = recent.pop_front().expect("full");
+                    folded_sum += old.point_world();
+                    folded_count += 1;
+                }
+                recent.push_back(view);
+                incremental.push_view(&view, (folded_sum, folded_count), recent.len());
+                let mut afresh = PreparedCluster::new(m);
+                for f in &keyframes {
+                    afresh.push(f);
+                }
+                afresh.add_folded(folded_sum, folded_count);
+                for f in &recent {
+                    afresh.push(f);
+                }
+                afresh.seal();
+                assert_eq!(
+                    incremental, afresh,
+                    "{n_keyframe} keyframe features, view {v}"
+                );
+                let params = McorParams {
+                    tau_gf: afresh.ring_to_map_point / afresh.ring_len_f64.max(1.0),
+                    ..McorParams::default()
+                };
+                for k in 0..4 {
+                    let p = Vector3::new(0.03 * k as f64, -0.02, 2.0 + 0.1 * k as f64);
+                    let current = gate_point(Some(p));
+                    assert_eq!(
+                        incremental.verdict_with_reach(&params, &twc, current.as_ref()),
+                        afresh.verdict_with_reach(&params, &twc, current.as_ref()),
+                    );
+                }
+            }
+        }
+    }
+
     fn random_match(
         g: &mut rand_chacha::ChaCha8Rng,
         trial: usize,
