@@ -710,6 +710,7 @@ impl System {
         let Some(tkw) = self.map.keyframe_pose_any(reference) else {
             return;
         };
+        let twc = tcw.inverse();
         for i in 0..cur.len() {
             let Some(id) = cur.map_points[i] else {
                 continue;
@@ -720,7 +721,7 @@ impl System {
             let Some(pc) = cur.features.unproject_camera(i, &self.camera) else {
                 continue;
             };
-            let Some(view) = FrameView::new(cur.id, &tcw, reference, &tkw, pc) else {
+            let Some(view) = FrameView::placed(cur.id, &twc, reference, &tkw, pc) else {
                 continue;
             };
             if let Some(mp) = self.map.map_point_mut(id) {

@@ -46,11 +46,23 @@ impl FrameView {
         tkw: &Isometry3<f64>,
         point_camera: Vector3<f64>,
     ) -> Option<FrameView> {
+        Self::placed(frame, &tcw.inverse(), reference, tkw, point_camera)
+    }
+
+    /// [`new`](Self::new) given the frame's inverse pose `twc` (camera to world): for callers
+    /// storing many views of one frame (the same bits as `new` with `twc.inverse()`).
+    pub fn placed(
+        frame: u64,
+        twc: &Isometry3<f64>,
+        reference: KeyFrameId,
+        tkw: &Isometry3<f64>,
+        point_camera: Vector3<f64>,
+    ) -> Option<FrameView> {
         let finite = point_camera.iter().all(|x| x.is_finite());
         if !finite || point_camera.z <= 0.0 {
             return None;
         }
-        let world = tcw.inverse() * Point3::from(point_camera);
+        let world = twc * Point3::from(point_camera);
         Some(FrameView {
             frame,
             reference,
