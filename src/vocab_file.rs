@@ -2,6 +2,7 @@
 //! binary form, told apart by the binary form's magic, with errors naming the file and line.
 
 use anyhow::{Context, Result};
+use slam_core::hash::fnv1a;
 use slam_core::place::vocabulary::BINARY_MAGIC;
 use slam_core::place::Vocabulary;
 use std::path::Path;
@@ -56,12 +57,6 @@ pub struct VocabularyChoice {
     pub vocabulary: Option<std::sync::Arc<Vocabulary>>,
     /// `none`, or the file name with an FNV-1a 64 of its bytes.
     pub identity: String,
-}
-
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    })
 }
 
 /// The vocabulary named by `--vocabulary` (or the config file's `vocabulary`): a file, `none`

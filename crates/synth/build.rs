@@ -5,7 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-/// FNV-1a over `bytes`, continuing from `h`.
+/// FNV-1a over `bytes`, continuing from `h`: `slam_core::hash::fnv1a_continue` written out,
+/// since the build script runs before the crates it could take it from are built.
 fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
     for &b in bytes {
         h ^= u64::from(b);

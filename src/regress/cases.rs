@@ -3,6 +3,7 @@
 use crate::runner::RunOutcome;
 use crate::sweep::plan::ConfigKind;
 use serde::{Deserialize, Serialize};
+use slam_core::hash::{fnv1a_continue, FNV1A_OFFSET};
 
 /// One synthetic sequence of the suite: which path through the system it exercises.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -189,15 +190,8 @@ impl Figures {
 /// FNV-1a 64 over the exact bits of every stamp and pose (translation, then the quaternion's
 /// x, y, z, w), as 16 hex digits.
 pub fn trajectory_hash(t: &ate_eval::Trajectory) -> String {
-    const OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-    const PRIME: u64 = 0x0000_0100_0000_01b3;
-    let mut h = OFFSET;
-    let mut eat = |v: f64| {
-        for b in v.to_bits().to_le_bytes() {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(PRIME);
-        }
-    };
+    let mut h = FNV1A_OFFSET;
+    let mut eat = |v: f64| h = fnv1a_continue(h, &v.to_bits().to_le_bytes());
     for (s, p) in t.stamps.iter().zip(&t.poses) {
         eat(*s);
         let v = p.translation.vector;

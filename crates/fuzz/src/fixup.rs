@@ -3,12 +3,7 @@
 //! every mutation of these formats would stop at the checksum test, which is worth fuzzing once
 //! and not a million times.
 
-/// FNV-1a 64 of `b`, the binary vocabulary's checksum.
-fn fnv1a(b: &[u8]) -> u64 {
-    b.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &x| {
-        (h ^ u64::from(x)).wrapping_mul(0x0000_0100_0000_01b3)
-    })
-}
+use slam_core::hash::fnv1a;
 
 /// Rewrites the last 8 bytes of a binary vocabulary as the checksum of the bytes before them.
 pub fn vocabulary_checksum(b: &mut [u8]) {

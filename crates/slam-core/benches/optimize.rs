@@ -392,13 +392,11 @@ fn bench_optimize(c: &mut Criterion) {
 
 /// FNV-1a over 64-bit words.
 fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for w in words {
-        for byte in w.to_le_bytes() {
-            h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    h
+    words
+        .into_iter()
+        .fold(slam_core::hash::FNV1A_OFFSET, |h, w| {
+            slam_core::hash::fnv1a_continue(h, &w.to_le_bytes())
+        })
 }
 
 /// One local BA on a benchmark problem (`wide`: the 120-keyframe window); prints the fingerprint

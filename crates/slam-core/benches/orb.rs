@@ -225,12 +225,8 @@ fn extract_once(dense: bool) {
     times.sort_by(f64::total_cmp);
     let (keypoints, descriptors) = result.expect("at least one run");
     // FNV-1a over every keypoint field and descriptor word.
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    let mut eat = |w: u64| {
-        for byte in w.to_le_bytes() {
-            h = (h ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
-        }
-    };
+    let mut h = slam_core::hash::FNV1A_OFFSET;
+    let mut eat = |w: u64| h = slam_core::hash::fnv1a_continue(h, &w.to_le_bytes());
     for k in &keypoints {
         eat(format!("{k:?}").len() as u64);
         for b in format!("{k:?}").bytes() {

@@ -21,6 +21,7 @@ pub mod data;
 pub mod feature;
 pub mod frame;
 pub mod geometry;
+pub mod hash;
 pub mod image;
 pub mod matching;
 pub mod module;

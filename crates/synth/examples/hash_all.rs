@@ -24,13 +24,10 @@ struct Fnv(u64);
 
 impl Fnv {
     fn new() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
+        Fnv(slam_core::hash::FNV1A_OFFSET)
     }
     fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 ^= x as u64;
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
+        self.0 = slam_core::hash::fnv1a_continue(self.0, b);
     }
     fn u64(&mut self, x: u64) {
         self.bytes(&x.to_le_bytes());

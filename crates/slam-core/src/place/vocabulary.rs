@@ -17,6 +17,7 @@
 
 use super::bow::{BowVector, FeatureVector, NodeId, WordId};
 use crate::feature::{hamming, Descriptor};
+use crate::hash::fnv1a;
 use std::fmt;
 
 /// How word weights are computed (DBoW2's `WeightingType`, same numbering).
@@ -590,13 +591,4 @@ pub fn descriptor_to_bytes(d: &Descriptor) -> [u8; 32] {
         *o = (d[i / 8] >> (8 * (i % 8))) as u8;
     }
     out
-}
-
-fn fnv1a(b: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &x in b {
-        h ^= u64::from(x);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
 }

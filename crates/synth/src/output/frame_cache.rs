@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use slam_core::hash::{fnv1a, fnv1a_continue};
 use slam_core::{DepthImage, FrameInput, GrayImage};
 
 use crate::generator::Generator;
@@ -109,24 +110,13 @@ fn rendered(gen: &Generator, index: usize) -> (FrameInput, Isometry3<f64>) {
     (frame.into_input(), pose)
 }
 
-/// FNV-1a over `bytes`, continuing from `h`.
-fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-
 /// The key of `gen`'s frames: code, architecture, seed and configuration (its `Debug` form
 /// prints every field, floats in their shortest round-trip form).
 fn generator_key(gen: &Generator) -> u64 {
-    let mut h = fnv1a(FNV_OFFSET, CODE_FINGERPRINT.as_bytes());
-    h = fnv1a(h, std::env::consts::ARCH.as_bytes());
-    h = fnv1a(h, &gen.seed().to_le_bytes());
-    fnv1a(h, format!("{:?}", gen.config()).as_bytes())
+    let mut h = fnv1a(CODE_FINGERPRINT.as_bytes());
+    h = fnv1a_continue(h, std::env::consts::ARCH.as_bytes());
+    h = fnv1a_continue(h, &gen.seed().to_le_bytes());
+    fnv1a_continue(h, format!("{:?}", gen.config()).as_bytes())
 }
 
 /// How a depth image is stored: as the 16-bit units the generator quantised it to when every
@@ -205,7 +195,7 @@ fn encode(
             gray(&mut b, r);
         }
     }
-    let sum = fnv1a(FNV_OFFSET, &b);
+    let sum = fnv1a(&b);
     b.extend_from_slice(&sum.to_le_bytes());
     b
 }
@@ -213,7 +203,7 @@ fn encode(
 /// Reads the file of frame `index` of key `key`; `None` unless it is whole and that frame's.
 fn decode(bytes: &[u8], key: u64, index: usize) -> Option<(FrameInput, Isometry3<f64>)> {
     let (body, sum) = bytes.split_at_checked(bytes.len().checked_sub(8)?)?;
-    if fnv1a(FNV_OFFSET, body) != u64::from_le_bytes(sum.try_into().ok()?) {
+    if fnv1a(body) != u64::from_le_bytes(sum.try_into().ok()?) {
         return None;
     }
     let mut r = Reader(body);
