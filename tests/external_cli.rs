@@ -281,7 +281,7 @@ fn a_folder_being_swept_is_locked_and_bad_definitions_are_refused() {
     ];
     let mut first = std::process::Command::new(env!("CARGO_BIN_EXE_noisefree"))
         .args(args)
-        .env(common::synth_cache_env().0, common::synth_cache_env().1)
+        .envs([common::synth_cache_env()])
         .spawn()
         .unwrap();
     // Wait until the first sweep holds the lock (its record file exists).
@@ -423,7 +423,7 @@ fn a_stand_in_with_relative_paths_env_at_both_levels_and_its_own_vocabulary_is_r
     // Run from another folder: the relative paths must not resolve against it.
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_noisefree"))
         .current_dir(&dir)
-        .env(common::synth_cache_env().0, common::synth_cache_env().1)
+        .envs([common::synth_cache_env()])
         .args([
             "sweep",
             "--seq",

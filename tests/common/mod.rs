@@ -21,7 +21,7 @@ pub fn synth_cache_env() -> (&'static str, &'static str) {
 pub fn noisefree(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_noisefree"))
         .args(args)
-        .env(synth_cache_env().0, synth_cache_env().1)
+        .envs([synth_cache_env()])
         .output()
         .expect("binary runs")
 }
