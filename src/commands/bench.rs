@@ -263,32 +263,46 @@ pub fn run(args: BenchArgs) -> Result<()> {
         "points",
         "ATE mm"
     );
-    // Rounds over the configurations: every configuration's repeat r runs in round r.
-    let mut runs: Vec<Vec<(f64, crate::runner::RunOutcome)>> =
-        kinds.iter().map(|_| Vec::new()).collect();
+    // Rounds over the configurations: every configuration's repeat r runs in round r. Each
+    // keeps its run times, its trajectory's hash (every repeat must give it) and its fastest run.
+    struct Measured {
+        runs_s: Vec<f64>,
+        hash: String,
+        fastest: (f64, crate::runner::RunOutcome),
+    }
+    let mut measured: Vec<Option<Measured>> = kinds.iter().map(|_| None).collect();
     for _ in 0..args.repeat {
-        for (&kind, runs) in kinds.iter().zip(&mut runs) {
-            runs.push(track(kind, 0));
+        for (&kind, m) in kinds.iter().zip(&mut measured) {
+            let (s, o) = track(kind, 0);
+            let hash = trajectory_hash(&o.trajectory);
+            match m {
+                None => {
+                    *m = Some(Measured {
+                        runs_s: vec![s],
+                        hash,
+                        fastest: (s, o),
+                    })
+                }
+                Some(m) => {
+                    if hash != m.hash {
+                        bail!(
+                            "{}: two runs of the same seed gave different trajectories",
+                            kind.name()
+                        );
+                    }
+                    m.runs_s.push(s);
+                    if s < m.fastest.0 {
+                        m.fastest = (s, o);
+                    }
+                }
+            }
         }
     }
     let mut figures = Vec::new();
-    for (&kind, runs) in kinds.iter().zip(runs) {
-        let hashes: Vec<String> = runs
-            .iter()
-            .map(|(_, o)| trajectory_hash(&o.trajectory))
-            .collect();
-        if hashes.iter().any(|h| h != &hashes[0]) {
-            bail!(
-                "{}: two runs of the same seed gave different trajectories",
-                kind.name()
-            );
-        }
-        let runs_s: Vec<f64> = runs.iter().map(|(s, _)| *s).collect();
-        let (s, o) = runs
-            .into_iter()
-            .reduce(|best, run| if run.0 < best.0 { run } else { best })
-            .expect("at least one run");
-        let f = ConfigFigures {
+    for (&kind, m) in kinds.iter().zip(measured) {
+        let m = m.expect("at least one run");
+        let (s, o) = m.fastest;
+        figures.push(ConfigFigures {
             config: kind.name(),
             fps: n as f64 / s,
             ms_per_frame: s * 1e3 / n as f64,
@@ -296,13 +310,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
             mapping_ms: mean(&o.stats, |x| x.time_mapping_ms),
             ba_ms: mean(&o.stats, |x| x.time_ba_ms),
             loop_ms: mean(&o.stats, |x| x.time_loop_ms),
-            runs_s,
-            hash: hashes[0].clone(),
+            runs_s: m.runs_s,
+            hash: m.hash,
             keyframes: o.keyframes,
             map_points: o.map_points,
             ate_m: o.ate_rmse(),
-        };
-        figures.push(f);
+        });
     }
     let orb_fps = figures.iter().find(|c| c.config == "orb").map(|c| c.fps);
     for f in &figures {

@@ -482,9 +482,6 @@ mod tests {
         (cluster, arena)
     }
 
-    /// A random gated match, trial `trial`: a cluster of up to `max_n` features (built both
-    /// ways, `folded` of them folded), the frame pose, and the current feature (camera frame;
-    /// none every fifth trial) near the cluster's centre; with the centre.
     /// A cluster that takes 100 frame views one at a time (its views folding past
     /// [`MCOR_CLUSTER_CAPACITY`]) is, after every view, the cluster built afresh from the same
     /// features: the same features, sums and ring bit for bit, and the same verdicts.
@@ -554,6 +551,9 @@ mod tests {
         }
     }
 
+    /// A random gated match, trial `trial`: a cluster of up to `max_n` features (built both
+    /// ways, `folded` of them folded), the frame pose, and the current feature (camera frame;
+    /// none every fifth trial) near the cluster's centre; with the centre.
     fn random_match(
         g: &mut rand_chacha::ChaCha8Rng,
         trial: usize,
