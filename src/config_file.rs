@@ -3,6 +3,7 @@
 //! command line's switches (`--mcor`, `--avc`, `--mapping-lag`, `--seed`).
 
 use anyhow::{Context, Result};
+use slam_core::module::noise::AvcAim;
 use slam_core::system::{AvcParams, ClusterViews, Config, McorParams, RigidConsensusParams};
 use slam_core::SensorKind;
 use std::path::Path;
@@ -151,6 +152,22 @@ pub fn apply_switches(mut config: Config, s: Switches) -> Config {
     config
 }
 
+/// The documented speed approximations `config` turns on, as their config-file settings
+/// (`avc.aim = "direct"`, `mcor.view_stride = K`), sorted; empty: the reference every result
+/// was made with. A sweep folder pins them, so approximate runs are never averaged with exact
+/// ones.
+pub fn approximations(config: &Config) -> Vec<String> {
+    let mut a = Vec::new();
+    if config.avc.as_ref().is_some_and(|a| a.aim == AvcAim::Direct) {
+        a.push("avc.aim = \"direct\"".to_string());
+    }
+    if let Some(m) = config.mcor.as_ref().filter(|m| m.view_stride != 1) {
+        a.push(format!("mcor.view_stride = {}", m.view_stride));
+    }
+    a.sort();
+    a
+}
+
 /// The configuration name of the tables' columns: `orb`, `mcor`, `avc` or `mcor+avc` (MC-OR
 /// with its default, every-frame cluster), or `mcor-keyframes` / `mcor-keyframes+avc` for
 /// MC-OR's keyframe cluster reading.
@@ -210,6 +227,22 @@ mod tests {
         let c = overlay_file(&Config::default(), &p).unwrap();
         assert_eq!(config_name(&c), "mcor-keyframes");
         assert_eq!(c.mcor.unwrap().cluster_views, ClusterViews::Keyframes);
+        // The view-stride approximation; the reference (1) when the file says nothing.
+        let p = file("stride", "[mcor]\nview_stride = 2\n");
+        let c = overlay_file(&Config::default(), &p).unwrap();
+        assert_eq!(config_name(&c), "mcor");
+        assert_eq!(c.mcor.unwrap().view_stride, 2);
+        assert_eq!(McorParams::default().view_stride, 1);
+        let p = file(
+            "approx",
+            "[mcor]\nview_stride = 3\n[avc]\naim = \"direct\"\n",
+        );
+        let c = overlay_file(&Config::default(), &p).unwrap();
+        assert_eq!(
+            approximations(&c),
+            ["avc.aim = \"direct\"", "mcor.view_stride = 3"]
+        );
+        assert!(approximations(&Config::default()).is_empty());
         let p = file("rc", "[rc]\nhypotheses = 32\n");
         let c = overlay_file(&Config::default(), &p).unwrap();
         assert_eq!(config_name(&c), "rc");

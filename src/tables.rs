@@ -569,6 +569,15 @@ pub fn table3(
             settings.synth_without.join(", ")
         )
     };
+    let notes = if settings.approximations.is_empty() {
+        notes
+    } else {
+        format!(
+            "{notes} Ours ran with the documented speed approximations {}: not the reference's \
+             results.",
+            settings.approximations.join(", ")
+        )
+    };
     let mut t = render("Table III: ATE RMSE (mm)", &notes, &header, &rows);
     t.csv = tidy_csv(&main_groups(records, catalog, &kinds, &systems), labels);
     t

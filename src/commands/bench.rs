@@ -14,7 +14,11 @@
 //! with `[avc] aim = "direct"`, the documented approximation that places the virtual camera
 //! without the angle's `atan2` / `sin` / `cos` (off by default; see
 //! [`AvcAim`](slam_core::module::noise::AvcAim)), so exact and approximate AVC are timed in one
-//! run.
+//! run. Likewise `NAME:strideK` (e.g. `mcor:stride2`) for a configuration with MC-OR: the run
+//! with `[mcor] view_stride = K`, the documented approximation whose map points keep the views
+//! of every K-th frame only (off by default; see
+//! [`McorParams::view_stride`](slam_core::module::noise::McorParams::view_stride)). Variants
+//! combine: `mcor+avc:direct:stride2`.
 
 use crate::commands::sweep::job_config;
 use crate::config_file::{base_config, overlay_file};
@@ -25,7 +29,7 @@ use crate::sweep::plan::{ConfigKind, Job, Params, RunConfig};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::write_atomic;
 use serde::Serialize;
-use slam_core::module::noise::AvcAim;
+use slam_core::module::noise::{AvcAim, ClusterViews};
 use slam_core::system::FrameStats;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -43,11 +47,13 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 300, value_name = "N")]
     pub frames: usize,
     /// Configurations timed, comma-separated; `NAME:direct` is a configuration with AVC under
-    /// the direct-aim approximation (`[avc] aim = "direct"`).
+    /// the direct-aim approximation (`[avc] aim = "direct"`), `NAME:strideK` one with MC-OR's
+    /// every-frame clusters under the view-stride approximation (`[mcor] view_stride = K`);
+    /// both may be given (`mcor+avc:direct:stride2`).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "orb,mcor,avc,mcor+avc,rc,avc:direct,mcor+avc:direct",
+        default_value = "orb,mcor,avc,mcor+avc,rc,avc:direct,mcor:stride2,mcor+avc:direct,mcor+avc:direct:stride2",
         value_name = "LIST"
     )]
     pub configs: Vec<String>,
@@ -121,39 +127,72 @@ fn mean(stats: &[FrameStats], f: fn(&FrameStats) -> f64) -> f64 {
     stats.iter().map(f).sum::<f64>() / stats.len().max(1) as f64
 }
 
-/// One entry of `--configs`: a configuration, and whether its AVC aims directly.
+/// One entry of `--configs`: a configuration, and the documented approximations it runs with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct BenchConfig {
     kind: ConfigKind,
+    /// `:direct`: AVC under `[avc] aim = "direct"`.
     direct_aim: bool,
+    /// `:strideK`: MC-OR's every-frame clusters under `[mcor] view_stride = K`.
+    view_stride: Option<u32>,
 }
 
 impl BenchConfig {
-    /// Parses `NAME` or `NAME:direct` (only for a configuration with AVC).
-    fn parse(s: &str) -> Result<BenchConfig> {
-        let (name, variant) = match s.trim().split_once(':') {
-            Some((name, variant)) => (name, Some(variant)),
-            None => (s.trim(), None),
-        };
-        let kind = ConfigKind::parse(name)?;
-        let direct_aim = match variant {
-            None => false,
-            Some("direct") if kind.avc() => true,
-            Some("direct") => {
-                bail!("\"{s}\": `:direct` is an approximation of AVC, and {kind} has no AVC")
-            }
-            Some(other) => bail!("\"{s}\": unknown variant \"{other}\" (known: direct)"),
-        };
-        Ok(BenchConfig { kind, direct_aim })
+    /// The configuration `kind` as the paper's columns run it (no approximation).
+    fn exact(kind: ConfigKind) -> BenchConfig {
+        BenchConfig {
+            kind,
+            direct_aim: false,
+            view_stride: None,
+        }
     }
 
-    /// The column's name: the configuration's, with `:direct` for the approximation.
-    fn name(self) -> String {
-        if self.direct_aim {
-            format!("{}:direct", self.kind.name())
-        } else {
-            self.kind.name().to_string()
+    /// Parses `NAME`, then any of the variants `:direct` (a configuration with AVC) and
+    /// `:strideK` (a configuration with MC-OR's every-frame clusters, K >= 1), each once.
+    fn parse(s: &str) -> Result<BenchConfig> {
+        let mut parts = s.trim().split(':');
+        let kind = ConfigKind::parse(parts.next().unwrap_or_default())?;
+        let mut c = BenchConfig::exact(kind);
+        for variant in parts {
+            if variant == "direct" {
+                if !kind.avc() {
+                    bail!("\"{s}\": `:direct` is an approximation of AVC, and {kind} has no AVC");
+                }
+                if c.direct_aim {
+                    bail!("\"{s}\": `:direct` given twice");
+                }
+                c.direct_aim = true;
+            } else if let Some(k) = variant.strip_prefix("stride") {
+                let stride = k.parse::<u32>().ok().filter(|k| *k >= 1).with_context(|| {
+                    format!("\"{s}\": `:{variant}` needs a whole number of frames >= 1 (e.g. `:stride2`)")
+                })?;
+                if !kind.mcor() || kind.cluster_views() == Some(ClusterViews::Keyframes) {
+                    bail!(
+                        "\"{s}\": `:{variant}` is an approximation of MC-OR's every-frame \
+                         clusters, and {kind} has none"
+                    );
+                }
+                if c.view_stride.is_some() {
+                    bail!("\"{s}\": `:stride` given twice");
+                }
+                c.view_stride = Some(stride);
+            } else {
+                bail!("\"{s}\": unknown variant \"{variant}\" (known: direct, strideK)");
+            }
         }
+        Ok(c)
+    }
+
+    /// The column's name: the configuration's, then its variants (`:direct`, `:strideK`).
+    fn name(self) -> String {
+        let mut name = self.kind.name().to_string();
+        if self.direct_aim {
+            name.push_str(":direct");
+        }
+        if let Some(k) = self.view_stride {
+            name.push_str(&format!(":stride{k}"));
+        }
+        name
     }
 }
 
@@ -227,6 +266,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 avc.aim = AvcAim::Direct;
             }
         }
+        if let (Some(k), Some(mcor)) = (bench.view_stride, config.mcor.as_mut()) {
+            mcor.view_stride = k;
+        }
         let t = Instant::now();
         let o = run_extracted(&seq, &extracted, &config, vocabulary, |_| {});
         (t.elapsed().as_secs_f64(), o)
@@ -248,8 +290,15 @@ pub fn run(args: BenchArgs) -> Result<()> {
         reading_s * 1e3 / n as f64,
         extraction_s * 1e3 / n as f64
     );
+    // The configuration column fits the longest name (variants make names long).
+    let w = kinds
+        .iter()
+        .map(|k| k.name().len())
+        .max()
+        .unwrap_or(0)
+        .max(16);
     println!(
-        "{:<16} {:>9} {:>9} {:>8} {:>9} {:>8} {:>8} {:>8}  {:<16} {:>4} {:>6} {:>9}",
+        "{:<w$} {:>9} {:>9} {:>8} {:>9} {:>8} {:>8} {:>8}  {:<16} {:>4} {:>6} {:>9}",
         "config",
         "frames/s",
         "of orb",
@@ -320,7 +369,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let orb_fps = figures.iter().find(|c| c.config == "orb").map(|c| c.fps);
     for f in &figures {
         println!(
-            "{:<16} {:>9.1} {:>9} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3}  {:<16} {:>4} {:>6} {:>9}",
+            "{:<w$} {:>9.1} {:>9} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3}  {:<16} {:>4} {:>6} {:>9}",
             f.config,
             f.fps,
             orb_fps.map_or("-".to_string(), |b| format!("{:.0} %", 100.0 * f.fps / b)),
@@ -341,11 +390,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.sweep_seeds > 0 {
         for seed in 0..args.sweep_seeds {
             for kind in ConfigKind::ALL {
-                let paper = BenchConfig {
-                    kind,
-                    direct_aim: false,
-                };
-                sweep_tracking_s += track(paper, seed).0;
+                sweep_tracking_s += track(BenchConfig::exact(kind), seed).0;
                 sweep_runs += 1;
             }
         }
@@ -409,7 +454,15 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let json = dir.join("bench.json");
         let mut a = args(
-            &["orb", "mcor", "avc", "mcor+avc", "rc", "mcor+avc:direct"],
+            &[
+                "orb",
+                "mcor",
+                "avc",
+                "mcor+avc",
+                "rc",
+                "mcor+avc:direct",
+                "mcor:stride2",
+            ],
             30,
         );
         a.json = Some(json.clone());
@@ -424,7 +477,15 @@ mod tests {
             .collect();
         assert_eq!(
             names,
-            ["orb", "mcor", "avc", "mcor+avc", "rc", "mcor+avc:direct"]
+            [
+                "orb",
+                "mcor",
+                "avc",
+                "mcor+avc",
+                "rc",
+                "mcor+avc:direct",
+                "mcor:stride2"
+            ]
         );
         for c in configs {
             // Two runs each, the fastest kept, the same trajectory (checked by the bench).
@@ -456,6 +517,33 @@ mod tests {
         let c = BenchConfig::parse("avc").unwrap();
         assert!(!c.direct_aim);
         assert_eq!(c.name(), "avc");
+    }
+
+    #[test]
+    fn a_stride_variant_is_the_configuration_with_mcor_views_every_kth_frame() {
+        let c = BenchConfig::parse("mcor+avc:stride2:direct").unwrap();
+        assert_eq!(c.kind, ConfigKind::McorAvc);
+        assert!(c.direct_aim);
+        assert_eq!(c.view_stride, Some(2));
+        assert_eq!(c.name(), "mcor+avc:direct:stride2");
+        assert_eq!(
+            BenchConfig::parse("mcor:stride3").unwrap().name(),
+            "mcor:stride3"
+        );
+        for (bad, says) in [
+            (
+                "avc:stride2",
+                "approximation of MC-OR's every-frame clusters, and avc has none",
+            ),
+            ("mcor-keyframes:stride2", "and mcor-keyframes has none"),
+            ("mcor:stride0", "needs a whole number of frames >= 1"),
+            ("mcor:stride", "needs a whole number of frames >= 1"),
+            ("mcor:stride2:stride2", "`:stride` given twice"),
+            ("avc:direct:direct", "`:direct` given twice"),
+        ] {
+            let e = BenchConfig::parse(bad).unwrap_err();
+            assert!(format!("{e:#}").contains(says), "{bad}: {e:#}");
+        }
     }
 
     #[test]

@@ -361,6 +361,10 @@ pub fn run(args: SweepArgs) -> Result<()> {
         Some(c) => c.loop_closing.enabled,
         None => true,
     } && vocabulary.vocabulary.is_some();
+    let approximations = file_config
+        .as_ref()
+        .map(crate::config_file::approximations)
+        .unwrap_or_default();
     // The reading of the `mcor` and `mcor+avc` columns: the config file's, else the default.
     let mcor_cluster = file_config
         .and_then(|c| c.mcor)
@@ -373,6 +377,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
             vocabulary: vocabulary.identity.clone(),
             loop_closing: loop_closing_on,
             mcor_cluster,
+            approximations,
             synth_without: {
                 let mut w = args.synth_without.clone();
                 w.sort();

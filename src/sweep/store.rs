@@ -132,6 +132,10 @@ pub struct FolderSettings {
     /// The synthetic effects switched off in every run (`--synth-without`), sorted; empty: all
     /// on. Runs of one sequence without different effects are different sequences.
     pub synth_without: Vec<String>,
+    /// The documented speed approximations the runs were made with (a config file's
+    /// `[avc] aim = "direct"`, `[mcor] view_stride = K`; see
+    /// [`approximations`](crate::config_file::approximations)), sorted; empty: the reference.
+    pub approximations: Vec<String>,
 }
 
 impl Default for FolderSettings {
@@ -144,6 +148,7 @@ impl Default for FolderSettings {
             loop_closing: false,
             mcor_cluster: ClusterViews::Keyframes,
             synth_without: Vec::new(),
+            approximations: Vec::new(),
         }
     }
 }
@@ -203,12 +208,30 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
                         )
                     })?,
             };
+            // Absent: the reference (folders from before the field had no approximation).
+            let approximations = match v.get("approximations") {
+                None => Vec::new(),
+                Some(x) => x
+                    .as_array()
+                    .and_then(|a| {
+                        a.iter()
+                            .map(|e| e.as_str().map(str::to_string))
+                            .collect::<Option<Vec<_>>>()
+                    })
+                    .with_context(|| {
+                        format!(
+                            "{}: approximations is not a list of settings",
+                            path.display()
+                        )
+                    })?,
+            };
             Ok(FolderSettings {
                 mapping_lag,
                 vocabulary,
                 loop_closing,
                 mcor_cluster,
                 synth_without,
+                approximations,
             })
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(FolderSettings::default()),
@@ -295,6 +318,22 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
             );
         }
     }
+    if !load_dir(dir)?.is_empty() && recorded.approximations != settings.approximations {
+        let says = |a: &[String]| {
+            if a.is_empty() {
+                "the reference (no speed approximation)".to_string()
+            } else {
+                format!("the approximations {}", a.join(", "))
+            }
+        };
+        bail!(
+            "{} holds runs made with {}; this sweep has {}: use another --out folder (an \
+             approximation's results differ from the reference's)",
+            dir.display(),
+            says(&recorded.approximations),
+            says(&settings.approximations)
+        );
+    }
     let mut text = format!(
         "# how every run in this folder was made (a sweep with other settings is refused here)\n\
          mapping_lag = {}\nvocabulary = {:?}\nloop_closing = {}\nmcor_cluster = {:?}\n",
@@ -305,6 +344,9 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
     );
     if !settings.synth_without.is_empty() {
         text += &format!("synth_without = {:?}\n", settings.synth_without);
+    }
+    if !settings.approximations.is_empty() {
+        text += &format!("approximations = {:?}\n", settings.approximations);
     }
     ate_eval::io::write_atomic(&path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
@@ -730,6 +772,7 @@ mod tests {
             loop_closing: true,
             mcor_cluster: ClusterViews::EveryFrame,
             synth_without: Vec::new(),
+            approximations: Vec::new(),
         };
         pin_settings(&d, &every).unwrap();
         assert_eq!(settings_of(&d).unwrap(), every);
@@ -757,6 +800,38 @@ mod tests {
             e.contains(SETTINGS_FILE) && e.contains("mcor_cluster"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_folder_pins_the_speed_approximations() {
+        let d = tmpdir("pin-approx");
+        let s = RunStore::open(&d, None).unwrap();
+        let approx = FolderSettings {
+            approximations: vec!["mcor.view_stride = 2".into()],
+            ..FolderSettings::default()
+        };
+        pin_settings(&d, &approx).unwrap();
+        assert_eq!(settings_of(&d).unwrap(), approx);
+        s.append(&rec("a", 0)).unwrap();
+        drop(s);
+        let reference = FolderSettings::default();
+        let e = format!("{:#}", pin_settings(&d, &reference).unwrap_err());
+        assert!(
+            e.contains("the approximations mcor.view_stride = 2")
+                && e.contains("this sweep has the reference"),
+            "{e}"
+        );
+        pin_settings(&d, &approx).unwrap();
+        // The reference does not record the field, and reads back as such.
+        let r = tmpdir("pin-approx-ref");
+        drop(RunStore::open(&r, None).unwrap());
+        pin_settings(&r, &reference).unwrap();
+        let text = std::fs::read_to_string(r.join(SETTINGS_FILE)).unwrap();
+        assert!(!text.contains("approximations"), "{text}");
+        assert_eq!(settings_of(&r).unwrap(), reference);
+        std::fs::write(r.join(SETTINGS_FILE), "approximations = 2\n").unwrap();
+        let e = format!("{:#}", settings_of(&r).unwrap_err());
+        assert!(e.contains("approximations"), "{e}");
     }
 
     #[test]

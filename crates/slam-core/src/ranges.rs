@@ -212,6 +212,12 @@ impl Config {
             c.above("tau_mf", m.tau_mf, 0.0);
             c.above("tau_gf", m.tau_gf, 0.0);
             c.above("tau_mg", m.tau_mg, 0.0);
+            c.count(
+                "view_stride",
+                u64::from(m.view_stride),
+                1,
+                u64::from(u32::MAX),
+            );
         }
         if let Some(a) = &self.avc {
             c.section("avc");
@@ -296,6 +302,17 @@ mod tests {
         assert_eq!(
             c.check().unwrap_err().to_string(),
             "mcor.tau_mg = inf: must be > 0"
+        );
+        let c = Config {
+            mcor: Some(McorParams {
+                view_stride: 0,
+                ..McorParams::default()
+            }),
+            ..Config::default()
+        };
+        assert_eq!(
+            c.check().unwrap_err().to_string(),
+            "mcor.view_stride = 0: must be in 1..=4294967295"
         );
     }
 }

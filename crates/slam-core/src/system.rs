@@ -701,7 +701,7 @@ impl System {
         let Some(params) = self.config.mcor.as_ref() else {
             return;
         };
-        if params.cluster_views != ClusterViews::EveryFrame {
+        if !params.keeps_views_of(cur.id) {
             return;
         }
         let (Some(tcw), Some(reference)) = (cur.tcw, cur.reference_kf) else {

@@ -877,6 +877,7 @@ mod tests {
                         tau_mf: tau,
                         tau_gf: tau,
                         tau_mg: tau * 0.7,
+                        view_stride: 1,
                     };
                     let tcw = twc(3).inverse();
                     let (index, outcome) =
