@@ -118,8 +118,17 @@ fn targets() -> Vec<Target> {
                 include_bytes!("../results/synthetic-lag3/sweep-settings.toml").to_vec(),
                 b"mcor_cluster = \"keyframes\"\nsynth_without = [\"blur\", \"exposure\"]\n"
                     .to_vec(),
+                b"approximations = [\"avc.aim = \\\"direct\\\"\", \"mcor.view_stride = 2\"]\n"
+                    .to_vec(),
             ],
-            &["mapping_lag", "vocabulary", "loop_closing", "mcor_cluster", "every-frame"],
+            &[
+                "mapping_lag",
+                "vocabulary",
+                "loop_closing",
+                "mcor_cluster",
+                "every-frame",
+                "approximations",
+            ],
             on_file("sweep-settings.toml", |dir, _| {
                 crate::sweep::store::settings_of(dir).map(|_| ())
             }),

@@ -453,18 +453,16 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("nf-bench-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let json = dir.join("bench.json");
-        let mut a = args(
-            &[
-                "orb",
-                "mcor",
-                "avc",
-                "mcor+avc",
-                "rc",
-                "mcor+avc:direct",
-                "mcor:stride2",
-            ],
-            30,
-        );
+        let timed = [
+            "orb",
+            "mcor",
+            "avc",
+            "mcor+avc",
+            "rc",
+            "mcor+avc:direct",
+            "mcor:stride2",
+        ];
+        let mut a = args(&timed, 30);
         a.json = Some(json.clone());
         run(a).unwrap();
         let report: serde_json::Value =
@@ -475,18 +473,7 @@ mod tests {
             .iter()
             .map(|c| c["config"].as_str().unwrap())
             .collect();
-        assert_eq!(
-            names,
-            [
-                "orb",
-                "mcor",
-                "avc",
-                "mcor+avc",
-                "rc",
-                "mcor+avc:direct",
-                "mcor:stride2"
-            ]
-        );
+        assert_eq!(names, timed);
         for c in configs {
             // Two runs each, the fastest kept, the same trajectory (checked by the bench).
             assert_eq!(c["runs_s"].as_array().unwrap().len(), 2);

@@ -192,39 +192,9 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
                 ),
             };
             // Absent: every effect on (folders from before the field had no other runs).
-            let synth_without = match v.get("synth_without") {
-                None => Vec::new(),
-                Some(x) => x
-                    .as_array()
-                    .and_then(|a| {
-                        a.iter()
-                            .map(|e| e.as_str().map(str::to_string))
-                            .collect::<Option<Vec<_>>>()
-                    })
-                    .with_context(|| {
-                        format!(
-                            "{}: synth_without is not a list of effect names",
-                            path.display()
-                        )
-                    })?,
-            };
+            let synth_without = string_list(&v, "synth_without", "effect names", &path)?;
             // Absent: the reference (folders from before the field had no approximation).
-            let approximations = match v.get("approximations") {
-                None => Vec::new(),
-                Some(x) => x
-                    .as_array()
-                    .and_then(|a| {
-                        a.iter()
-                            .map(|e| e.as_str().map(str::to_string))
-                            .collect::<Option<Vec<_>>>()
-                    })
-                    .with_context(|| {
-                        format!(
-                            "{}: approximations is not a list of settings",
-                            path.display()
-                        )
-                    })?,
-            };
+            let approximations = string_list(&v, "approximations", "settings", &path)?;
             Ok(FolderSettings {
                 mapping_lag,
                 vocabulary,
@@ -236,6 +206,22 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(FolderSettings::default()),
         Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
+    }
+}
+
+/// The list of strings under `key` of settings file `path` (empty when absent); an error names
+/// the file, the key and `what` the strings are.
+fn string_list(v: &toml::Value, key: &str, what: &str, path: &Path) -> Result<Vec<String>> {
+    match v.get(key) {
+        None => Ok(Vec::new()),
+        Some(x) => x
+            .as_array()
+            .and_then(|a| {
+                a.iter()
+                    .map(|e| e.as_str().map(str::to_string))
+                    .collect::<Option<Vec<_>>>()
+            })
+            .with_context(|| format!("{}: {key} is not a list of {what}", path.display())),
     }
 }
 
@@ -317,22 +303,22 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
                 says(&settings.synth_without)
             );
         }
-    }
-    if !load_dir(dir)?.is_empty() && recorded.approximations != settings.approximations {
-        let says = |a: &[String]| {
-            if a.is_empty() {
-                "the reference (no speed approximation)".to_string()
-            } else {
-                format!("the approximations {}", a.join(", "))
-            }
-        };
-        bail!(
-            "{} holds runs made with {}; this sweep has {}: use another --out folder (an \
-             approximation's results differ from the reference's)",
-            dir.display(),
-            says(&recorded.approximations),
-            says(&settings.approximations)
-        );
+        if recorded.approximations != settings.approximations {
+            let says = |a: &[String]| {
+                if a.is_empty() {
+                    "the reference (no speed approximation)".to_string()
+                } else {
+                    format!("the approximations {}", a.join(", "))
+                }
+            };
+            bail!(
+                "{} holds runs made with {}; this sweep has {}: use another --out folder (an \
+                 approximation's results differ from the reference's)",
+                dir.display(),
+                says(&recorded.approximations),
+                says(&settings.approximations)
+            );
+        }
     }
     let mut text = format!(
         "# how every run in this folder was made (a sweep with other settings is refused here)\n\
@@ -803,66 +789,50 @@ mod tests {
     }
 
     #[test]
-    fn a_folder_pins_the_speed_approximations() {
-        let d = tmpdir("pin-approx");
-        let s = RunStore::open(&d, None).unwrap();
-        let approx = FolderSettings {
-            approximations: vec!["mcor.view_stride = 2".into()],
-            ..FolderSettings::default()
-        };
-        pin_settings(&d, &approx).unwrap();
-        assert_eq!(settings_of(&d).unwrap(), approx);
-        s.append(&rec("a", 0)).unwrap();
-        drop(s);
-        let reference = FolderSettings::default();
-        let e = format!("{:#}", pin_settings(&d, &reference).unwrap_err());
-        assert!(
-            e.contains("the approximations mcor.view_stride = 2")
-                && e.contains("this sweep has the reference"),
-            "{e}"
-        );
-        pin_settings(&d, &approx).unwrap();
-        // The reference does not record the field, and reads back as such.
-        let r = tmpdir("pin-approx-ref");
-        drop(RunStore::open(&r, None).unwrap());
-        pin_settings(&r, &reference).unwrap();
-        let text = std::fs::read_to_string(r.join(SETTINGS_FILE)).unwrap();
-        assert!(!text.contains("approximations"), "{text}");
-        assert_eq!(settings_of(&r).unwrap(), reference);
-        std::fs::write(r.join(SETTINGS_FILE), "approximations = 2\n").unwrap();
-        let e = format!("{:#}", settings_of(&r).unwrap_err());
-        assert!(e.contains("approximations"), "{e}");
-    }
-
-    #[test]
-    fn a_folder_pins_the_synthetic_effects_switched_off() {
-        let d = tmpdir("pin-without");
-        let s = RunStore::open(&d, None).unwrap();
-        let without = FolderSettings {
-            synth_without: vec!["blur".into(), "lens".into()],
-            ..FolderSettings::default()
-        };
-        pin_settings(&d, &without).unwrap();
-        assert_eq!(settings_of(&d).unwrap(), without);
-        s.append(&rec("a", 0)).unwrap();
-        drop(s);
-        let all_on = FolderSettings::default();
-        let e = format!("{:#}", pin_settings(&d, &all_on).unwrap_err());
-        assert!(
-            e.contains("--synth-without blur,lens") && e.contains("every synthetic effect on"),
-            "{e}"
-        );
-        pin_settings(&d, &without).unwrap();
-        // A folder with every effect on does not record the field, and reads back as such.
-        let on = tmpdir("pin-without-on");
-        drop(RunStore::open(&on, None).unwrap());
-        pin_settings(&on, &all_on).unwrap();
-        let text = std::fs::read_to_string(on.join(SETTINGS_FILE)).unwrap();
-        assert!(!text.contains("synth_without"), "{text}");
-        assert_eq!(settings_of(&on).unwrap(), all_on);
-        std::fs::write(on.join(SETTINGS_FILE), "synth_without = \"blur\"\n").unwrap();
-        let e = format!("{:#}", settings_of(&on).unwrap_err());
-        assert!(e.contains("synth_without"), "{e}");
+    fn a_folder_pins_the_effects_switched_off_and_the_speed_approximations() {
+        let cases = [
+            (
+                "synth_without",
+                FolderSettings {
+                    synth_without: vec!["blur".into(), "lens".into()],
+                    ..FolderSettings::default()
+                },
+                ["--synth-without blur,lens", "every synthetic effect on"],
+            ),
+            (
+                "approximations",
+                FolderSettings {
+                    approximations: vec!["mcor.view_stride = 2".into()],
+                    ..FolderSettings::default()
+                },
+                [
+                    "the approximations mcor.view_stride = 2",
+                    "this sweep has the reference",
+                ],
+            ),
+        ];
+        for (key, pinned, says) in cases {
+            let d = tmpdir(&format!("pin-{key}"));
+            let s = RunStore::open(&d, None).unwrap();
+            pin_settings(&d, &pinned).unwrap();
+            assert_eq!(settings_of(&d).unwrap(), pinned);
+            s.append(&rec("a", 0)).unwrap();
+            drop(s);
+            let plain = FolderSettings::default();
+            let e = format!("{:#}", pin_settings(&d, &plain).unwrap_err());
+            assert!(e.contains(says[0]) && e.contains(says[1]), "{e}");
+            pin_settings(&d, &pinned).unwrap();
+            // A folder with the list empty does not record the field, and reads back as such.
+            let empty = tmpdir(&format!("pin-{key}-empty"));
+            drop(RunStore::open(&empty, None).unwrap());
+            pin_settings(&empty, &plain).unwrap();
+            let text = std::fs::read_to_string(empty.join(SETTINGS_FILE)).unwrap();
+            assert!(!text.contains(key), "{text}");
+            assert_eq!(settings_of(&empty).unwrap(), plain);
+            std::fs::write(empty.join(SETTINGS_FILE), format!("{key} = \"blur\"\n")).unwrap();
+            let e = format!("{:#}", settings_of(&empty).unwrap_err());
+            assert!(e.contains(key) && e.contains("is not a list"), "{e}");
+        }
     }
 
     /// The lock's holder in a person's time (issue 44: "started 1795711463 s after the epoch").
