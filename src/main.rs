@@ -5,6 +5,7 @@
 mod analysis;
 mod commands;
 mod config_file;
+mod difficulty;
 mod external;
 mod figures;
 #[cfg(test)]
@@ -61,6 +62,9 @@ enum Command {
     /// Per-frame tracking + mapping cost of each configuration on one sequence, one core, and
     /// the frames per second of a sweep of the paper's four configurations.
     Bench(commands::bench::BenchArgs),
+    /// The level of a camera chain at which the baseline's median ATE on a sequence equals a
+    /// target (the paper's figure), by bisection.
+    Match(commands::match_level::MatchArgs),
     /// Vocabularies of ORB words for place recognition: train, convert (ORBvoc.txt <-> binary), info.
     Vocab(commands::vocab::VocabArgs),
 }
@@ -82,6 +86,7 @@ fn main() -> ExitCode {
         Command::Vocab(a) => commands::vocab::run(a),
         Command::Bench(a) => commands::bench::run(a),
         Command::Settings(a) => commands::settings::run(a),
+        Command::Match(a) => commands::match_level::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

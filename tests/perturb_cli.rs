@@ -100,6 +100,101 @@ fn a_perturbed_stereo_folder_runs_bit_for_bit_as_the_internal_perturbation() {
 }
 
 #[test]
+fn a_named_camera_chain_exports_its_camera_and_ground_truth_bit_for_bit() {
+    // Depth families, the given camera and the scored ground truth all travel through the
+    // folder: its settings carry the perturbed camera, its groundtruth.txt the perturbed truth.
+    same_trajectory(
+        &["--seq", "kinect"],
+        "kinect-fr3:1",
+        "40",
+        "perturb-chain-rgbd",
+        true,
+    );
+    same_trajectory(
+        &["--seq", "stereo"],
+        "euroc:2",
+        "30",
+        "perturb-chain-stereo",
+        true,
+    );
+}
+
+/// `Camera.NAME: value` of an ORB-SLAM2 settings file.
+fn setting(yaml: &Path, name: &str) -> f64 {
+    let text = std::fs::read_to_string(yaml).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with(&format!("{name}:")))
+        .unwrap_or_else(|| panic!("{name} in {text}"));
+    line.split(':').nth(1).unwrap().trim().parse().unwrap()
+}
+
+#[test]
+fn focal_error_changes_the_settings_and_not_one_image_byte() {
+    let dir = tmpdir("perturb-focal");
+    let write = |chain: &str, name: &str| {
+        let out = dir.join(name);
+        noisefree_ok(&[
+            "perturb",
+            "--seq",
+            "kinect",
+            "--frames",
+            "3",
+            "--perturb",
+            chain,
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        out
+    };
+    let (clean, focal) = (
+        write("focal-error:0", "clean"),
+        write("focal-error:1", "focal"),
+    );
+    for sub in ["rgb", "depth"] {
+        for i in 0..3 {
+            let f = format!("{sub}/{i:06}.png");
+            assert_eq!(
+                std::fs::read(clean.join(&f)).unwrap(),
+                std::fs::read(focal.join(&f)).unwrap(),
+                "{f}"
+            );
+        }
+    }
+    let (a, b) = (
+        clean.join("camera-orbslam2.yaml"),
+        focal.join("camera-orbslam2.yaml"),
+    );
+    for key in ["Camera.fx", "Camera.fy"] {
+        assert!(
+            (setting(&b, key) / setting(&a, key) - 1.01).abs() < 1e-12,
+            "{key}"
+        );
+    }
+    for key in ["Camera.cx", "Camera.cy", "Camera.bf"] {
+        assert_eq!(setting(&b, key), setting(&a, key), "{key}");
+    }
+    // A ground-truth family on a folder without ground truth is refused before anything runs.
+    std::fs::remove_file(clean.join("groundtruth.txt")).unwrap();
+    let o = dir.join("o");
+    assert_clean_failure(
+        &noisefree(&[
+            "run",
+            "--path",
+            clean.to_str().unwrap(),
+            "--perturb",
+            "gt-offset:10",
+            "--out",
+            o.to_str().unwrap(),
+        ]),
+        "gt-offset does not apply to clean: it has no ground truth",
+    );
+    assert!(!o.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn real_euroc_frames_perturbed_run_bit_for_bit_as_the_internal_perturbation() {
     let euroc = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -131,6 +226,15 @@ fn bad_perturbations_are_refused_before_anything_runs() {
         ),
         ("frame-drop:1.5", "whole number"),
         ("depth-axial", "expected family:level"),
+        (
+            "kinect-fr9:1",
+            "chains: kinect-fr1, kinect-fr2, kinect-fr3, euroc",
+        ),
+        ("kinect-fr1:100", "kinect-fr1:100: the level must be 0 to"),
+        (
+            "focal-error:25",
+            "focal-error:25: the level must be -20 to 20",
+        ),
     ] {
         assert_clean_failure(
             &noisefree(&["perturb", "--perturb", chain, "-o", o]),
@@ -159,6 +263,21 @@ fn bad_perturbations_are_refused_before_anything_runs() {
         "occluders",
         "stereo-misalignment",
         "x Nguyen sigma",
+        "focal-error",
+        "principal-point-error",
+        "distortion-error",
+        "depth-distortion",
+        "depth-registration",
+        "ir-shadow",
+        "disparity-quantization",
+        "gt-offset",
+        "gt-jitter",
+        "gt-hand-eye",
+        "kinect-fr1: TUM freiburg1",
+        "kinect-fr2",
+        "kinect-fr3",
+        "euroc: EuRoC",
+        "Teichman",
     ] {
         assert!(text.contains(f), "{text}");
     }
@@ -343,4 +462,61 @@ fn out_of_range_sweep_flags_are_refused_with_their_range() {
             "nothing ran for {flag} {value}"
         );
     }
+}
+
+#[test]
+fn match_bisects_to_a_target_and_says_when_it_is_out_of_reach() {
+    let dir = tmpdir("perturb-match");
+    let out = dir.join("m");
+    let o = out.to_str().unwrap();
+    let base = [
+        "match",
+        "--seq",
+        "kinect",
+        "--frames",
+        "40",
+        "--chain",
+        "depth-scale",
+        "--runs",
+        "2",
+        "--max-level",
+        "20",
+        "--out",
+        o,
+    ];
+    let mut args = base.to_vec();
+    args.extend(["--target", "5000mm"]);
+    let far = noisefree(&args);
+    assert_clean_failure(&far, "lies above what depth-scale reaches: median ATE");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap()).unwrap();
+    let (low, high) = (
+        json["result"]["status"]["at_low"].as_f64().unwrap(),
+        json["result"]["status"]["at_high"].as_f64().unwrap(),
+    );
+    assert!(high > low, "{low} {high}");
+    let target = format!("{}", (low + high) / 2.0);
+    let mut args = base.to_vec();
+    args.extend(["--target", &target, "--tolerance", "0.2"]);
+    let ok = noisefree_ok(&args);
+    let text = String::from_utf8_lossy(&ok.stdout);
+    assert!(
+        text.contains("gives the baseline a median ATE of"),
+        "{text}"
+    );
+    let steps = String::from_utf8_lossy(&ok.stderr);
+    assert!(steps.matches("median").count() >= 3, "{steps}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap()).unwrap();
+    assert_eq!(json["result"]["status"]["status"], "matched");
+    let level = json["result"]["status"]["level"].as_f64().unwrap();
+    assert!(level > 0.0 && level < 20.0, "{level}");
+    let csv = std::fs::read_to_string(out.join("match.csv")).unwrap();
+    assert!(csv.lines().count() > 2 * 3, "{csv}");
+    // A twin's chain and target come from the sequence it imitates; a non-twin needs both.
+    assert_clean_failure(
+        &noisefree(&["match", "--seq", "kinect", "--target", "paper", "--out", o]),
+        "imitates no TUM or EuRoC sequence",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

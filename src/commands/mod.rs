@@ -5,6 +5,7 @@ pub mod bench;
 pub mod eval;
 pub mod features;
 pub mod fetch;
+pub mod match_level;
 pub mod perturb;
 pub mod plot;
 pub mod regress;

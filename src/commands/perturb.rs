@@ -6,7 +6,7 @@
 use crate::select::{open, LoadOptions, Source};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use perturb::{perturb_sequence, Chain, Family};
+use perturb::{perturb_sequence, Chain, Domain, Family, NamedChain};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `noisefree perturb`.
@@ -21,7 +21,8 @@ pub struct PerturbArgs {
     /// The folder's camera from an ORB-SLAM2 / ORB-SLAM3 settings file.
     #[arg(long, value_name = "FILE.yaml", requires = "path")]
     pub camera: Option<PathBuf>,
-    /// The perturbation: `family:level[+family:level...]` (see --list).
+    /// The perturbation: `family:level[+family:level...]`, or a named camera chain
+    /// `kinect-fr1:1` (see --list).
     #[arg(long, value_name = "CHAIN", required_unless_present = "list")]
     pub perturb: Option<String>,
     /// Seed of the perturbation's random draws.
@@ -56,19 +57,56 @@ pub struct PerturbArgs {
     pub quiet: bool,
 }
 
-/// The families as a table (for `--list` and the README).
+/// The families as a table, then the named camera chains with each member's level and source
+/// (for `--list` and the README).
 pub fn family_table() -> String {
-    let mut s = String::from("family               unit                  levels\n");
+    let mut s =
+        String::from("family                  acts on        unit                  levels\n");
     for f in Family::ALL {
         let (lo, hi, whole) = f.range();
         s.push_str(&format!(
-            "{:<20} {:<21} {lo} to {hi}{}\n",
+            "{:<23} {:<14} {:<21} {lo} to {hi}{}\n",
             f.name(),
+            domain_name(f.domain()),
             f.unit(),
             if whole { ", whole" } else { "" }
         ));
     }
+    s.push_str(
+        "\nnamed chains (CHAIN:L multiplies every member's level by L: 0 none, 1 the \
+         literature's camera, 2 twice as bad):\n",
+    );
+    for c in NamedChain::ALL {
+        s.push_str(&format!(
+            "\n{}: {} (levels 0 to {})\n",
+            c.name(),
+            c.camera(),
+            (c.max_level() * 1000.0).floor() / 1000.0
+        ));
+        for m in c.members() {
+            s.push_str(&format!(
+                "  {:<23} {:>8} {:<20} {}\n",
+                m.family.name(),
+                format!("{}", (m.level * 1000.0).round() / 1000.0),
+                m.family.unit(),
+                m.source.split_whitespace().collect::<Vec<_>>().join(" ")
+            ));
+        }
+    }
     s
+}
+
+/// What a family acts on, as `--list` prints it.
+fn domain_name(d: Domain) -> &'static str {
+    match d {
+        Domain::Depth => "depth",
+        Domain::Image => "images",
+        Domain::Time => "frames, stamps",
+        Domain::Dynamic => "scene",
+        Domain::Stereo => "stereo rig",
+        Domain::Calibration => "given camera",
+        Domain::GroundTruth => "ground truth",
+    }
 }
 
 /// Runs `noisefree perturb`.
@@ -109,15 +147,21 @@ pub fn run(args: PerturbArgs) -> Result<()> {
     );
     bar.set_prefix("perturb");
     let note = format!(
-        "source {}\nperturbation {}\nperturbation_seed {}\nframes {}\nsynth_seed {}\nwritten by noisefree {}",
+        "source {}\nperturbation {}\napplied {}\nperturbation_seed {}\nframes {}\nsynth_seed {}\nwritten by noisefree {}",
         source.label(),
-        chain,
+        args.perturb.as_deref().unwrap_or("none").trim(),
+        chain.effective(),
         args.perturb_seed,
         frames.len(),
         args.synth_seed,
         env!("CARGO_PKG_VERSION")
     );
-    let folder = crate::external::export::source_folder(&source, &catalog, &opts)?;
+    // A perturbed ground truth is written from memory, not copied from the source.
+    let folder = if chain.touches_groundtruth() {
+        None
+    } else {
+        crate::external::export::source_folder(&source, &catalog, &opts)?
+    };
     perturb::write_folder(&seq, &frames, &out, &note, folder.as_deref(), |k| {
         bar.set_position(k as u64)
     })

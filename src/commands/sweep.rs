@@ -130,6 +130,12 @@ pub struct SweepArgs {
     /// Families, units and ranges: `noisefree perturb --list`.
     #[arg(long = "perturb", value_name = "FAMILY:LEVELS")]
     pub perturb: Vec<String>,
+    /// An ablation of a named camera chain at a level (`kinect-fr1:1`): the chain, each member
+    /// alone at its level in the chain, and the chain without each member (axes
+    /// `kinect-fr1~ir-shadow:0,1`, ...), added to the --perturb axes: which member accounts for
+    /// what the chain does.
+    #[arg(long = "ablate", value_name = "CHAIN:LEVEL")]
+    pub ablate: Option<String>,
     /// A perturbation applied under every point of the sweep (`occluders:2`, or a chain
     /// `depth-axial:1+exposure:5`), the axes' members added after it.
     #[arg(long = "perturb-with", value_name = "CHAIN")]
@@ -286,6 +292,10 @@ pub fn run(args: SweepArgs) -> Result<()> {
         .iter()
         .map(|a| perturb::Axis::parse(a).with_context(|| format!("--perturb {a}")))
         .collect::<Result<_>>()?;
+    let mut axes = axes;
+    if let Some(a) = &args.ablate {
+        axes.extend(ablation(a).with_context(|| format!("--ablate {a}"))?);
+    }
     let with = perturb::Chain::parse(args.perturb_with.as_deref().unwrap_or(""))
         .context("--perturb-with")?;
     let points = perturbation_points(&axes, &with, args.perturb_seed);
@@ -449,14 +459,18 @@ pub fn run(args: SweepArgs) -> Result<()> {
         synth_without: args.synth_without.clone(),
         camera: None,
     };
-    // A perturbation that does not fit a sequence's sensor is refused before any run.
+    // A perturbation that does not fit a sequence (its sensor, its camera, its ground truth)
+    // is refused before any run: applying a chain reads no frame.
     if !points.is_empty() {
         for (src, label) in srcs.iter().zip(&labels) {
-            let (seq, _) = open(src, &catalog, &load_opts)?;
+            let (seq, frames) = open(src, &catalog, &load_opts)?;
             for p in &points {
-                perturb::Chain::parse(&p.chain)?
+                let chain = perturb::Chain::parse(&p.chain)?;
+                chain
                     .check_sensor(seq.camera.sensor, label)
                     .context("--perturb")?;
+                perturb::perturb_sequence(&seq, frames.clone(), &chain, p.seed)
+                    .with_context(|| format!("--perturb {chain} on {label}"))?;
             }
         }
     }
@@ -617,13 +631,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 fbar.set_prefix(format!("{label} features"));
                 // Depth-only and time perturbations keep the images: their ORB is that of the
                 // unperturbed frames, attached to each point's depth and stamps.
-                let reuse = perturbed_sweep
-                    && chain.effective().0.iter().all(|p| {
-                        matches!(
-                            p.family.domain(),
-                            perturb::Domain::Depth | perturb::Domain::Time
-                        )
-                    });
+                let reuse = perturbed_sweep && chain.keeps_images();
                 let mut how = "extracted";
                 let extracted = if reuse {
                     if image_frames.is_none() {
@@ -665,7 +673,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
                                 imf.attach(
                                     &frames,
                                     |i| perturber.source(i),
-                                    &seq.camera,
+                                    &pseq.camera,
                                     || fbar.inc(1),
                                 )
                             })
@@ -674,7 +682,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
                     .with_context(|| format!("reading the frames of {what}"))?
                 } else {
                     pool.install(|| {
-                        ExtractedSequence::extract_all(&frames, &seq.camera, &orbs, || fbar.inc(1))
+                        ExtractedSequence::extract_all(&frames, &pseq.camera, &orbs, || fbar.inc(1))
                     })
                     .with_context(|| format!("reading the frames of {what}"))?
                 };
@@ -751,6 +759,27 @@ pub fn run(args: SweepArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The axes of `--ablate CHAIN:LEVEL`.
+fn ablation(text: &str) -> Result<Vec<perturb::Axis>> {
+    let (name, level) = text
+        .split_once(':')
+        .context("expected CHAIN:LEVEL, e.g. kinect-fr1:1")?;
+    let chain = perturb::NamedChain::parse(name).with_context(|| {
+        format!(
+            "unknown chain {name:?}; known: {}",
+            perturb::NamedChain::ALL
+                .map(perturb::NamedChain::name)
+                .join(", ")
+        )
+    })?;
+    let level: f64 = level
+        .trim()
+        .parse()
+        .with_context(|| format!("{level:?}: expected a number"))?;
+    perturb::Subject::Named(chain).check_level(level)?;
+    Ok(perturb::ablation_axes(chain, level))
 }
 
 /// What the runs of external systems on one sequence share.
@@ -954,7 +983,12 @@ fn perturbed_folder(
         crate::external::export::safe(&chain.to_string())
     ));
     if !folder.is_dir() {
-        let source_dir = crate::external::export::source_folder(src, catalog, opts)?;
+        // A perturbed ground truth is written from memory, not copied from the source.
+        let source_dir = if chain.touches_groundtruth() {
+            None
+        } else {
+            crate::external::export::source_folder(src, catalog, opts)?
+        };
         let note = format!(
             "source {}\nperturbation {chain}\nperturbation_seed {seed}\nframes {}",
             src.label(),

@@ -292,7 +292,7 @@ pub fn perturbation_points(
     // The unperturbed point first, when any axis has an identity level.
     if axes
         .iter()
-        .any(|a| a.levels.iter().any(|&l| a.family.is_identity(l)))
+        .any(|a| a.levels.iter().any(|&l| a.subject.is_identity(l)))
     {
         push(PerturbPoint {
             chain: base.clone(),
@@ -304,17 +304,14 @@ pub fn perturbation_points(
     for axis in axes {
         for &level in &axis.levels {
             let mut chain = with.clone();
-            chain.0.push(perturb::Perturbation {
-                family: axis.family,
-                level,
-            });
+            chain.0.extend(axis.subject.at(level));
             let canon = chain.effective().to_string();
             if canon == base {
                 continue;
             }
             push(PerturbPoint {
                 chain: canon,
-                family: Some(axis.family.name().to_string()),
+                family: Some(axis.subject.name()),
                 level: Some(level),
                 seed,
             });

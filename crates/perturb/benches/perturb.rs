@@ -4,7 +4,7 @@
 //! boundary).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use perturb::{Chain, Family, Perturber};
+use perturb::{Chain, Domain, Family, Perturber};
 use slam_core::{Camera, DepthImage, FrameInput, GrayImage, SensorKind};
 use std::sync::Arc;
 
@@ -50,6 +50,17 @@ fn level(f: Family) -> f64 {
         Family::RgbDepthOffset => 66.0,
         Family::Occluders => 3.0,
         Family::StereoMisalignment => 0.2,
+        Family::DepthDistortion => 1.5,
+        Family::DepthRegistration => 2.0,
+        Family::IrShadow => 1.0,
+        Family::DisparityQuantization => 1.0,
+        // Not per frame: the given camera and the scored ground truth (not benched).
+        Family::FocalError
+        | Family::PrincipalPointError
+        | Family::DistortionError
+        | Family::GtOffset
+        | Family::GtJitter
+        | Family::GtHandEye => 0.0,
     }
 }
 
@@ -61,6 +72,9 @@ fn benches(c: &mut Criterion) {
         .build_global()
         .ok();
     for f in Family::ALL {
+        if matches!(f.domain(), Domain::Calibration | Domain::GroundTruth) {
+            continue;
+        }
         let stereo = f == Family::StereoMisalignment || !f.applies_to(SensorKind::Rgbd);
         let mut camera = if stereo {
             let mut c = Camera::tum_fr3();

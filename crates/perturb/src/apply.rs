@@ -7,7 +7,10 @@
 //! names them, then `stamp-jitter` moves the stamp. Random draws are keyed by the *input*
 //! frame, so frame 30's noise is the same whether or not frames were dropped before it.
 
-use crate::spec::{Chain, Domain, Family};
+use crate::calibration::given_camera;
+use crate::family::{Domain, Family, Perturbation};
+use crate::groundtruth::perturb_groundtruth;
+use crate::spec::Chain;
 use crate::{depth, image, member_seed, occluders, stereo, PerturbError};
 use datasets::{FrameReader, Sequence};
 use slam_core::{Camera, FrameInput, SensorKind};
@@ -172,6 +175,9 @@ impl Perturber {
                         f.right = Some(Arc::new(stereo::rotate_right(r, &self.camera, p.level)));
                     }
                 }
+                // The camera given to the system and the ground truth: the sequence's, not
+                // a frame's (`perturb_sequence`).
+                Domain::Calibration | Domain::GroundTruth => {}
             }
         }
         Ok(f)
@@ -191,8 +197,10 @@ fn stamp_on_grid(t: f64) -> f64 {
 }
 
 /// The sequence of `seq` / `frames` under `chain` with perturbation seed `seed`: the same
-/// sequence (camera, ground truth, name) with a reader of perturbed frames. A chain that
-/// changes nothing returns the reader as it is (level 0 is bit-identical by construction).
+/// sequence (name, stamps) with a reader of perturbed frames, the camera the system is given
+/// after the calibration families and the ground truth after the ground-truth families. A chain
+/// that changes no frame returns the reader as it is (level 0 is bit-identical by
+/// construction). A ground-truth family on a sequence without ground truth is refused.
 pub fn perturb_sequence(
     seq: &Sequence,
     frames: FrameReader,
@@ -207,8 +215,39 @@ pub fn perturb_sequence(
         frames.len(),
         &seq.name,
     )?;
-    if p.chain().0.is_empty() {
-        return Ok((seq.clone(), frames));
+    let mut out = seq.clone();
+    let members = |domain: Domain| -> Vec<(Perturbation, u64)> {
+        p.chain()
+            .0
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.family.domain() == domain)
+            .map(|(pos, m)| (*m, member_seed(seed, m.family, pos)))
+            .collect()
+    };
+    let calibration = members(Domain::Calibration);
+    if !calibration.is_empty() {
+        out.camera = given_camera(&seq.camera, &calibration, &seq.name)?;
+    }
+    let truth = members(Domain::GroundTruth);
+    if !truth.is_empty() {
+        let gt = seq
+            .groundtruth
+            .as_ref()
+            .ok_or_else(|| PerturbError::NotApplicable {
+                family: truth[0].0.family.name(),
+                sequence: seq.name.clone(),
+                why: "it has no ground truth to perturb".into(),
+            })?;
+        out.groundtruth = Some(perturb_groundtruth(gt, &truth));
+    }
+    let touches_frames = p
+        .chain()
+        .0
+        .iter()
+        .any(|m| !matches!(m.family.domain(), Domain::Calibration | Domain::GroundTruth));
+    if !touches_frames {
+        return Ok((out, frames));
     }
     let len = p.len();
     let reader = FrameReader::new(len, move |i| {
@@ -220,5 +259,5 @@ pub fn perturb_sequence(
             ),
         })
     });
-    Ok((seq.clone(), reader))
+    Ok((out, reader))
 }

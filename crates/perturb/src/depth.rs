@@ -8,7 +8,8 @@ use synth::hash::{NoiseKey, Stream};
 use synth::sensor::depth::{sensor_depth, DepthNoise};
 use synth::{AxialNoise, BlobHoles, FlyingPixels, LateralNoise, SystematicDistortion};
 
-use crate::spec::Family;
+use crate::family::Family;
+use crate::systematic;
 
 /// Applies depth family `family` at `level` to `depth` (frame `frame`, member seed `seed`).
 /// Families that are not per-image depth changes (lag, offset) return it unchanged.
@@ -83,6 +84,12 @@ pub fn apply(
                 NoiseKey::new(seed, frame, Stream::Lateral),
             ),
         },
+        Family::DepthDistortion => systematic::depth_distortion(depth, level, units, seed),
+        Family::DepthRegistration => systematic::depth_registration(depth, level, seed),
+        Family::IrShadow => systematic::ir_shadow(depth, level, camera),
+        Family::DisparityQuantization => {
+            systematic::disparity_quantization(depth, level, units, seed, frame)
+        }
         _ => depth.clone(),
     }
 }

@@ -3,7 +3,14 @@
 //! (a run, a sweep's shared feature extraction, the folder written for an external system), so
 //! a perturbed frame means the same thing to all of them.
 //!
-//! - [`spec`]: the taxonomy (families, units, ranges) and the `family:level+...` spelling;
+//! - [`family`]: the taxonomy (families, what they act on, units, ranges);
+//! - [`chains`]: named camera chains, a real camera's systematic errors at the literature's
+//!   levels;
+//! - [`spec`]: the `family:level+...` spelling of chains and sweep axes;
+//! - [`calibration`]: the camera a system is given (`focal-error`, ...), images untouched;
+//! - [`groundtruth`]: the ground truth a run is scored against (`gt-offset`, ...);
+//! - [`systematic`]: a real depth sensor's systematic errors (`depth-distortion`,
+//!   `depth-registration`, `ir-shadow`, `disparity-quantization`), fixed for a sequence;
 //! - [`depth`], [`image`], [`occluders`], [`stereo`]: what each family does to one frame,
 //!   through synth's sensor models (`synth::sensor`) where one exists, so the synthetic
 //!   sequences and the perturbations share one noise model;
@@ -17,16 +24,23 @@
 //! on any machine; level 0 returns the input frame itself.
 
 pub mod apply;
+pub mod calibration;
+pub mod chains;
 pub mod depth;
 pub mod export;
+pub mod family;
+pub mod groundtruth;
 pub mod image;
 pub mod occluders;
 pub mod spec;
 pub mod stereo;
+pub mod systematic;
 
 pub use apply::{perturb_sequence, Perturber};
+pub use chains::NamedChain;
 pub use export::write_folder;
-pub use spec::{Axis, Chain, Domain, Family, Perturbation};
+pub use family::{Domain, Family, Perturbation};
+pub use spec::{ablation_axes, Axis, Chain, Subject};
 
 /// What can go wrong when a perturbation is named, checked or applied.
 #[derive(Debug, thiserror::Error)]
@@ -66,6 +80,17 @@ pub enum PerturbError {
         sequence: String,
         /// Its sensor.
         sensor: &'static str,
+    },
+    /// A family that needs something the sequence does not have (lens distortion to leave
+    /// out, ground truth to perturb).
+    #[error("{family} does not apply to {sequence}: {why}")]
+    NotApplicable {
+        /// The family.
+        family: &'static str,
+        /// The sequence.
+        sequence: String,
+        /// What it lacks.
+        why: String,
     },
     /// Reading a frame of the underlying sequence failed.
     #[error(transparent)]

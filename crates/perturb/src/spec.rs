@@ -1,233 +1,11 @@
-//! The taxonomy: every perturbation family, what one level of it means, its valid range, and
-//! the spelling `family:level[+family:level...]` a command line uses.
+//! The spelling a command line uses: chains `family:level[+family:level...]` (a named camera
+//! chain `kinect-fr1:1` standing for its members) and sweep axes `family:LEVELS`.
 
+use crate::chains::NamedChain;
+pub use crate::family::{Domain, Family, Perturbation};
 use crate::PerturbError;
 use slam_core::SensorKind;
 use std::fmt;
-
-/// What a family acts on (decides which features a sweep can reuse across its levels).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Domain {
-    /// The depth image (RGB-D only); images and stamps untouched.
-    Depth,
-    /// The grey image(s).
-    Image,
-    /// Which frames, and their stamps.
-    Time,
-    /// Objects drawn into images and depth (moving occluders).
-    Dynamic,
-    /// The stereo rig (stereo only).
-    Stereo,
-}
-
-/// A perturbation family.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum Family {
-    /// Nguyen et al.'s axial noise at normal incidence, sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 m,
-    /// times the level, added to the measured depth.
-    DepthAxial,
-    /// Lateral noise: each pixel's depth read from a neighbour offset by N(0, level) pixels in x
-    /// and y (mixes fore- and background at boundaries).
-    DepthLateral,
-    /// Share of the valid depth removed in blobs, percent.
-    DepthHoles,
-    /// Flying pixels: depths mixed between the two surfaces within `level` pixels of a
-    /// discontinuity.
-    DepthEdges,
-    /// Depth scale bias, percent (z' = z (1 + level / 100)).
-    DepthScale,
-    /// Depth taken from `level` frames earlier (stamped as the colour image).
-    DepthLag,
-    /// Signal-dependent sensor noise: its standard deviation at mid-grey (128), grey levels.
-    ImageNoise,
-    /// Linear motion blur, length in pixels along a per-frame direction.
-    MotionBlur,
-    /// Per-frame exposure (gain) flicker: standard deviation of the gain, percent.
-    Exposure,
-    /// JPEG compression at quality `level` (1-100; 0 = none): lower is worse.
-    Jpeg,
-    /// Keep every `level`-th frame (faster motion at the same frame rate of processing).
-    FrameDrop,
-    /// Gaussian noise on every frame's stamp, standard deviation in milliseconds.
-    StampJitter,
-    /// Depth from the frame nearest `level` milliseconds later (negative: earlier) than the
-    /// colour image it is paired with.
-    RgbDepthOffset,
-    /// `level` textured objects moving through the view, with consistent depth (RGB-D) or
-    /// disparity (stereo).
-    Occluders,
-    /// The right camera rotated by `level` degrees about its x axis (an imperfect
-    /// rectification: rows no longer correspond).
-    StereoMisalignment,
-}
-
-impl Family {
-    /// Every family, in the taxonomy's order.
-    pub const ALL: [Family; 15] = [
-        Family::DepthAxial,
-        Family::DepthLateral,
-        Family::DepthHoles,
-        Family::DepthEdges,
-        Family::DepthScale,
-        Family::DepthLag,
-        Family::ImageNoise,
-        Family::MotionBlur,
-        Family::Exposure,
-        Family::Jpeg,
-        Family::FrameDrop,
-        Family::StampJitter,
-        Family::RgbDepthOffset,
-        Family::Occluders,
-        Family::StereoMisalignment,
-    ];
-
-    /// The command-line spelling.
-    pub fn name(self) -> &'static str {
-        match self {
-            Family::DepthAxial => "depth-axial",
-            Family::DepthLateral => "depth-lateral",
-            Family::DepthHoles => "depth-holes",
-            Family::DepthEdges => "depth-edges",
-            Family::DepthScale => "depth-scale",
-            Family::DepthLag => "depth-lag",
-            Family::ImageNoise => "image-noise",
-            Family::MotionBlur => "motion-blur",
-            Family::Exposure => "exposure",
-            Family::Jpeg => "jpeg",
-            Family::FrameDrop => "frame-drop",
-            Family::StampJitter => "stamp-jitter",
-            Family::RgbDepthOffset => "rgb-depth-offset",
-            Family::Occluders => "occluders",
-            Family::StereoMisalignment => "stereo-misalignment",
-        }
-    }
-
-    /// Parses the command-line spelling.
-    pub fn parse(s: &str) -> Result<Family, PerturbError> {
-        let s = s.trim();
-        Family::ALL
-            .into_iter()
-            .find(|f| f.name() == s)
-            .ok_or_else(|| PerturbError::UnknownFamily {
-                name: s.to_string(),
-                known: Family::ALL.map(Family::name).join(", "),
-            })
-    }
-
-    /// The unit of one level, as tables print it.
-    pub fn unit(self) -> &'static str {
-        match self {
-            Family::DepthAxial => "x Nguyen sigma",
-            Family::DepthLateral => "px sigma",
-            Family::DepthHoles => "% of depth",
-            Family::DepthEdges => "px band",
-            Family::DepthScale => "% scale",
-            Family::DepthLag => "frames",
-            Family::ImageNoise => "grey levels at 128",
-            Family::MotionBlur => "px",
-            Family::Exposure => "% gain sigma",
-            Family::Jpeg => "quality",
-            Family::FrameDrop => "keep 1 in n",
-            Family::StampJitter => "ms sigma",
-            Family::RgbDepthOffset => "ms",
-            Family::Occluders => "objects",
-            Family::StereoMisalignment => "deg",
-        }
-    }
-
-    /// What the family acts on.
-    pub fn domain(self) -> Domain {
-        match self {
-            Family::DepthAxial
-            | Family::DepthLateral
-            | Family::DepthHoles
-            | Family::DepthEdges
-            | Family::DepthScale
-            | Family::DepthLag
-            | Family::RgbDepthOffset => Domain::Depth,
-            Family::ImageNoise | Family::MotionBlur | Family::Exposure | Family::Jpeg => {
-                Domain::Image
-            }
-            Family::FrameDrop | Family::StampJitter => Domain::Time,
-            Family::Occluders => Domain::Dynamic,
-            Family::StereoMisalignment => Domain::Stereo,
-        }
-    }
-
-    /// The valid levels: inclusive bounds, and whether only whole numbers make sense.
-    pub fn range(self) -> (f64, f64, bool) {
-        match self {
-            Family::DepthAxial => (0.0, 1000.0, false),
-            Family::DepthLateral => (0.0, 50.0, false),
-            Family::DepthHoles => (0.0, 99.0, false),
-            Family::DepthEdges => (0.0, 20.0, true),
-            Family::DepthScale => (-50.0, 50.0, false),
-            Family::DepthLag => (0.0, 30.0, true),
-            Family::ImageNoise => (0.0, 64.0, false),
-            Family::MotionBlur => (0.0, 60.0, false),
-            Family::Exposure => (0.0, 100.0, false),
-            Family::Jpeg => (0.0, 100.0, true),
-            Family::FrameDrop => (0.0, 100.0, true),
-            Family::StampJitter => (0.0, 1000.0, false),
-            Family::RgbDepthOffset => (-1000.0, 1000.0, false),
-            Family::Occluders => (0.0, 20.0, true),
-            Family::StereoMisalignment => (0.0, 10.0, false),
-        }
-    }
-
-    /// Whether the family applies to a sequence of `sensor`.
-    pub fn applies_to(self, sensor: SensorKind) -> bool {
-        match self.domain() {
-            Domain::Depth => sensor == SensorKind::Rgbd,
-            Domain::Stereo => sensor == SensorKind::Stereo,
-            _ => true,
-        }
-    }
-
-    /// Whether `level` leaves frames as they are (level 0; frame-drop 1 keeps every frame;
-    /// jpeg 0 is no compression).
-    pub fn is_identity(self, level: f64) -> bool {
-        level == 0.0 || (self == Family::FrameDrop && level == 1.0)
-    }
-
-    /// Checks `level` against the family's range.
-    pub fn check_level(self, level: f64) -> Result<(), PerturbError> {
-        let (lo, hi, whole) = self.range();
-        if !level.is_finite() || level < lo || level > hi || (whole && level.fract() != 0.0) {
-            return Err(PerturbError::LevelOutOfRange {
-                family: self.name(),
-                level,
-                range: format!(
-                    "{}{lo} to {hi} ({})",
-                    if whole { "a whole number from " } else { "" },
-                    self.unit()
-                ),
-            });
-        }
-        Ok(())
-    }
-}
-
-impl fmt::Display for Family {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// One family at one level.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Perturbation {
-    /// The family.
-    pub family: Family,
-    /// Its level, in the family's unit.
-    pub level: f64,
-}
-
-impl fmt::Display for Perturbation {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}", self.family, self.level)
-    }
-}
 
 /// Perturbations applied in order (`depth-axial:2+depth-lateral:2`). Empty: none.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -245,14 +23,42 @@ impl Chain {
         for part in s.split('+') {
             let (name, level) = part.split_once(':').ok_or_else(|| PerturbError::Syntax {
                 text: part.trim().to_string(),
-                expected: "family:level, e.g. depth-axial:2".into(),
+                expected: "family:level or chain:level, e.g. depth-axial:2 or kinect-fr1:1".into(),
             })?;
-            let family = Family::parse(name)?;
+            let subject = Subject::parse(name)?;
             let level = parse_number(level)?;
-            family.check_level(level)?;
-            out.push(Perturbation { family, level });
+            subject.check_level(level)?;
+            out.extend(subject.at(level));
         }
         Ok(Chain(out))
+    }
+
+    /// Whether any effective member changes the camera the system is given.
+    pub fn touches_calibration(&self) -> bool {
+        self.effective()
+            .0
+            .iter()
+            .any(|p| p.family.domain() == Domain::Calibration)
+    }
+
+    /// Whether any effective member changes the ground truth a run is scored against.
+    pub fn touches_groundtruth(&self) -> bool {
+        self.effective()
+            .0
+            .iter()
+            .any(|p| p.family.domain() == Domain::GroundTruth)
+    }
+
+    /// Whether every effective member leaves the images and the camera as they are (depth,
+    /// time and ground-truth families), so a frame's ORB keypoints and descriptors, placed
+    /// by the same camera, are those of the unperturbed frame.
+    pub fn keeps_images(&self) -> bool {
+        self.effective().0.iter().all(|p| {
+            matches!(
+                p.family.domain(),
+                Domain::Depth | Domain::Time | Domain::GroundTruth
+            )
+        })
     }
 
     /// The chain without its identity members (what is actually applied).
@@ -309,12 +115,136 @@ impl fmt::Display for Chain {
     }
 }
 
-/// One axis of a sweep: a family and the levels to try (`depth-axial:0,1,2,4,8` or
-/// `image-noise:0:20:5`, a range start:stop:step with stop included).
+/// What an axis or a chain member names: one family, a named camera chain whose level
+/// multiplies all its members, or a named chain without one of its members (`kinect-fr1~ir-
+/// shadow`, for the ablation that says what a member accounts for).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Subject {
+    /// One family.
+    Family(Family),
+    /// A named chain of a real camera's systematic errors.
+    Named(NamedChain),
+    /// A named chain with one member left out.
+    Without(NamedChain, Family),
+}
+
+impl Subject {
+    /// Parses a family or chain name (`chain~family`: the chain without that member); an
+    /// unknown one is refused listing the known ones.
+    pub fn parse(s: &str) -> Result<Subject, PerturbError> {
+        let s = s.trim();
+        let unknown = || PerturbError::UnknownFamily {
+            name: s.to_string(),
+            known: format!(
+                "{}; chains: {}",
+                Family::ALL.map(Family::name).join(", "),
+                NamedChain::ALL.map(NamedChain::name).join(", ")
+            ),
+        };
+        if let Some((chain, member)) = s.split_once('~') {
+            let chain = NamedChain::parse(chain).ok_or_else(unknown)?;
+            let family = Family::parse(member)?;
+            if !chain.members().iter().any(|m| m.family == family) {
+                return Err(PerturbError::Syntax {
+                    text: s.to_string(),
+                    expected: format!(
+                        "a member of {chain}: {}",
+                        chain
+                            .members()
+                            .iter()
+                            .map(|m| m.family.name())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                });
+            }
+            return Ok(Subject::Without(chain, family));
+        }
+        if let Some(c) = NamedChain::parse(s) {
+            return Ok(Subject::Named(c));
+        }
+        Family::parse(s).map(Subject::Family).map_err(|_| unknown())
+    }
+
+    /// The spelling.
+    pub fn name(self) -> String {
+        match self {
+            Subject::Family(f) => f.name().to_string(),
+            Subject::Named(c) => c.name().to_string(),
+            Subject::Without(c, f) => format!("{c}~{f}"),
+        }
+    }
+
+    /// Checks a level: the family's range, or for a chain 0 up to the level at which a member
+    /// would leave its own range.
+    pub fn check_level(self, level: f64) -> Result<(), PerturbError> {
+        let chain = match self {
+            Subject::Family(f) => return f.check_level(level),
+            Subject::Named(c) | Subject::Without(c, _) => c,
+        };
+        let hi = (chain.max_level() * 1000.0).floor() / 1000.0;
+        if !level.is_finite() || !(0.0..=hi).contains(&level) {
+            return Err(PerturbError::LevelOutOfRange {
+                family: chain.name(),
+                level,
+                range: format!("0 to {hi} (x the literature's levels)"),
+            });
+        }
+        Ok(())
+    }
+
+    /// The members `subject:level` stands for.
+    pub fn at(self, level: f64) -> Vec<Perturbation> {
+        match self {
+            Subject::Family(family) => vec![Perturbation { family, level }],
+            Subject::Named(c) => c.at(level),
+            Subject::Without(c, f) => c.at(level).into_iter().filter(|p| p.family != f).collect(),
+        }
+    }
+
+    /// Whether `level` changes nothing.
+    pub fn is_identity(self, level: f64) -> bool {
+        self.at(level).iter().all(|p| p.family.is_identity(p.level))
+    }
+}
+
+impl fmt::Display for Subject {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+/// The axes of an ablation of named chain `chain` at `level`: the chain itself, each member
+/// alone at its level in the chain, and the chain without each member, every axis at 0 and
+/// `level` (so the unperturbed point is shared): what closes a gap, and which member accounts
+/// for it.
+pub fn ablation_axes(chain: NamedChain, level: f64) -> Vec<Axis> {
+    let mut axes = vec![Axis {
+        subject: Subject::Named(chain),
+        levels: vec![0.0, level],
+    }];
+    for p in chain.at(level) {
+        axes.push(Axis {
+            subject: Subject::Family(p.family),
+            levels: vec![0.0, p.level],
+        });
+    }
+    for m in chain.members() {
+        axes.push(Axis {
+            subject: Subject::Without(chain, m.family),
+            levels: vec![0.0, level],
+        });
+    }
+    axes
+}
+
+/// One axis of a sweep: a family or named chain and the levels to try
+/// (`depth-axial:0,1,2,4,8`, `image-noise:0:20:5`, a range start:stop:step with stop
+/// included, or `kinect-fr1:0,0.5,1,2`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Axis {
-    /// The family.
-    pub family: Family,
+    /// The family or chain.
+    pub subject: Subject,
     /// Its levels, in the order given (tables follow it: put the mildest first).
     pub levels: Vec<f64>,
 }
@@ -329,7 +259,7 @@ impl Axis {
                 text: s.trim().to_string(),
                 expected: "family:LEVELS, e.g. depth-axial:0,1,2,4 or image-noise:0:20:5".into(),
             })?;
-        let family = Family::parse(name)?;
+        let subject = Subject::parse(name)?;
         let levels = if levels.contains(':') {
             let parts: Vec<&str> = levels.split(':').collect();
             if parts.len() != 3 {
@@ -367,7 +297,7 @@ impl Axis {
             });
         }
         for &l in &levels {
-            family.check_level(l)?;
+            subject.check_level(l)?;
         }
         let mut unique: Vec<f64> = Vec::new();
         for l in levels {
@@ -376,7 +306,7 @@ impl Axis {
             }
         }
         Ok(Axis {
-            family,
+            subject,
             levels: unique,
         })
     }

@@ -1,0 +1,266 @@
+//! A real depth sensor's systematic errors, the ones bundle adjustment cannot average away
+//! because they are the same in every frame (or, for quantisation, on the same lattice):
+//!
+//! - [`depth_distortion`]: z' = z (1 + L/100 (z / 3 m) F(u, v)), with F a smooth field over the
+//!   image, |F| <= 1 and 1 at its extreme, drawn once per sequence: a multiplicative error that
+//!   grows with range, L % at 3 m where it is largest (Teichman et al. RSS 2013; Herrera et al.
+//!   2012).
+//! - [`depth_registration`]: the depth at colour pixel p read at p + d(p), |d| = L px in a
+//!   direction that varies smoothly (+-0.5 rad about one drawn once per sequence), nearest
+//!   pixel; where a nearer surface (by more than 5 %) lies on the way from p to p + d, its depth
+//!   wins, as a z-buffered registration lets the foreground cover the background: foreground
+//!   edges grow by up to L px on the side the warp comes from.
+//! - [`ir_shadow`]: the projector sits L x 7.5 cm to the right of the IR camera (+x of the image,
+//!   the Kinect v1's layout seen from the sensor); a surface point it cannot see has no depth.
+//!   Along a row, a point at column u and depth z falls at projector column u - f b / z; it is
+//!   in shadow when a valid point to its right falls at a smaller projector column. A
+//!   foreground edge facing away from the projector (a left edge) casts a hole on the
+//!   background beside it, f b (1/z_fg - 1/z_bg) pixels wide; right edges cast none.
+//! - [`disparity_quantization`]: depth measured as disparity d = f b / z at the Kinect's f b
+//!   (43.5 px m: 7.5 cm x 580 px), rounded to a lattice of L/8 px after a jitter of half a step
+//!   (sigma), as ICL-NUIM's simulator does (Handa et al. 2014), so the depth step grows as
+//!   L z^2 / (8 f b): 2.9 mm at 1 m, 11.5 mm at 2 m at L = 1.
+//!
+//! Every output is on the depth PNG grid (`units` per metre); holes (0) stay holes.
+
+use slam_core::{Camera, DepthImage};
+use synth::hash::{NoiseKey, Stream};
+use synth::sensor::depth::quantise_png;
+
+/// The Kinect v1's projector-to-IR-camera baseline, metres (Khoshelham & Elberink 2012).
+pub const KINECT_BASELINE_M: f64 = 0.075;
+
+/// The Kinect v1's IR focal length times its baseline, pixels x metres (580 px x 7.5 cm), the
+/// scale of its disparity (synth's `DisparityQuantisation` default).
+pub const KINECT_FB: f64 = 43.5;
+
+/// The Kinect v1's disparity resolution, pixels (1/8 px).
+pub const KINECT_DISPARITY_STEP: f64 = 0.125;
+
+/// A smooth field over a `w x h` image with values in [-1, 1] reaching +-1: a sum of six
+/// separable cosines with periods between one and four image sizes, drawn from `key`.
+/// Returned as (row factors, column factors, normaliser) so a pixel costs six products.
+pub struct SmoothField {
+    cols: Vec<[f64; 6]>,
+    rows: Vec<[f64; 6]>,
+    scale: f64,
+}
+
+impl SmoothField {
+    /// The field of `key` for a `w x h` image.
+    pub fn new(key: NoiseKey, w: usize, h: usize) -> SmoothField {
+        let mut cols = vec![[0.0; 6]; w];
+        let mut rows = vec![[0.0; 6]; h];
+        let tau = std::f64::consts::TAU;
+        for k in 0..6 {
+            let i = 8 * k as u64;
+            let (px, py) = (
+                w as f64 * (1.0 + 3.0 * key.uniform(i)),
+                h as f64 * (1.0 + 3.0 * key.uniform(i + 1)),
+            );
+            let (fx, fy) = (tau * key.uniform(i + 2), tau * key.uniform(i + 3));
+            let amp = 0.5 + key.uniform(i + 4);
+            for (u, c) in cols.iter_mut().enumerate() {
+                c[k] = amp * (tau * u as f64 / px + fx).cos();
+            }
+            for (v, r) in rows.iter_mut().enumerate() {
+                r[k] = (tau * v as f64 / py + fy).cos();
+            }
+        }
+        let mut field = SmoothField {
+            cols,
+            rows,
+            scale: 1.0,
+        };
+        let mut max = 0.0f64;
+        for v in 0..h {
+            for u in 0..w {
+                max = max.max(field.at(u, v).abs());
+            }
+        }
+        field.scale = if max > 0.0 { 1.0 / max } else { 0.0 };
+        field
+    }
+
+    /// The field at pixel (u, v).
+    #[inline]
+    pub fn at(&self, u: usize, v: usize) -> f64 {
+        let (c, r) = (&self.cols[u], &self.rows[v]);
+        (0..6).map(|k| c[k] * r[k]).sum::<f64>() * self.scale
+    }
+}
+
+/// `depth-distortion` at `level` percent at 3 m, field drawn from member seed `seed`.
+pub fn depth_distortion(depth: &DepthImage, level: f64, units: f64, seed: u64) -> DepthImage {
+    let (w, h) = (depth.width, depth.height);
+    let field = SmoothField::new(NoiseKey::new(seed, 0, Stream::Range), w, h);
+    let k = level / 100.0 / 3.0;
+    let data = depth
+        .data
+        .iter()
+        .enumerate()
+        .map(|(i, &z)| {
+            if z <= 0.0 {
+                return z;
+            }
+            let z = z as f64;
+            quantise_png(z * (1.0 + k * z * field.at(i % w, i / w)), units)
+        })
+        .collect();
+    DepthImage {
+        width: w,
+        height: h,
+        data,
+    }
+}
+
+/// The displacement (pixels) of `depth-registration` at `level` at pixel (u, v), for the
+/// field and base direction of member seed `seed` (see [`depth_registration`]).
+pub struct RegistrationWarp {
+    field: SmoothField,
+    base: f64,
+    level: f64,
+}
+
+impl RegistrationWarp {
+    /// The warp of `level` pixels for a `w x h` image and member seed `seed`.
+    pub fn new(level: f64, seed: u64, w: usize, h: usize) -> RegistrationWarp {
+        let key = NoiseKey::new(seed, 0, Stream::Lateral);
+        RegistrationWarp {
+            field: SmoothField::new(key, w, h),
+            base: NoiseKey::new(seed, 1, Stream::Lateral).uniform(0) * std::f64::consts::TAU,
+            level,
+        }
+    }
+
+    /// The displacement at (u, v), pixels.
+    pub fn at(&self, u: usize, v: usize) -> (f64, f64) {
+        let a = self.base + 0.5 * self.field.at(u, v);
+        (self.level * a.cos(), self.level * a.sin())
+    }
+}
+
+/// `depth-registration` at `level` pixels, warp drawn from member seed `seed`.
+pub fn depth_registration(depth: &DepthImage, level: f64, seed: u64) -> DepthImage {
+    let (w, h) = (depth.width, depth.height);
+    let warp = RegistrationWarp::new(level, seed, w, h);
+    let src = &depth.data;
+    let sample = |x: f64, y: f64| -> Option<f32> {
+        let (x, y) = (x.round(), y.round());
+        if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+            return None;
+        }
+        Some(src[y as usize * w + x as usize])
+    };
+    let steps = level.ceil().max(1.0) as usize;
+    let data = (0..w * h)
+        .map(|i| {
+            let (u, v) = (i % w, i / w);
+            let (dx, dy) = warp.at(u, v);
+            let Some(z) = sample(u as f64 + dx, v as f64 + dy) else {
+                return 0.0;
+            };
+            // The nearest surface on the way, where it is a different (nearer) one.
+            let mut best = z;
+            for s in 0..steps {
+                let t = s as f64 / steps as f64;
+                if let Some(zs) = sample(u as f64 + t * dx, v as f64 + t * dy) {
+                    if zs > 0.0 && (best <= 0.0 || (zs as f64) < 0.95 * best as f64) {
+                        best = zs;
+                    }
+                }
+            }
+            best
+        })
+        .collect();
+    DepthImage {
+        width: w,
+        height: h,
+        data,
+    }
+}
+
+/// `ir-shadow` at `level` x the Kinect's baseline, for a camera of focal length `camera.fx`.
+pub fn ir_shadow(depth: &DepthImage, level: f64, camera: &Camera) -> DepthImage {
+    let (w, h) = (depth.width, depth.height);
+    let fb = camera.fx * KINECT_BASELINE_M * level;
+    let mut data = depth.data.clone();
+    for v in 0..h {
+        let row = &depth.data[v * w..(v + 1) * w];
+        let mut min_right = f64::INFINITY;
+        for u in (0..w).rev() {
+            let z = row[u] as f64;
+            if z <= 0.0 {
+                continue;
+            }
+            let up = u as f64 - fb / z;
+            if up > min_right {
+                data[v * w + u] = 0.0;
+            } else {
+                min_right = up;
+            }
+        }
+    }
+    DepthImage {
+        width: w,
+        height: h,
+        data,
+    }
+}
+
+/// `disparity-quantization` at `level` x 1/8 px: frame `frame`'s jitter drawn from member seed
+/// `seed`.
+pub fn disparity_quantization(
+    depth: &DepthImage,
+    level: f64,
+    units: f64,
+    seed: u64,
+    frame: usize,
+) -> DepthImage {
+    let key = NoiseKey::new(seed, frame, Stream::Axial);
+    let step = level * KINECT_DISPARITY_STEP;
+    let data = depth
+        .data
+        .iter()
+        .enumerate()
+        .map(|(i, &z)| {
+            if z <= 0.0 {
+                return z;
+            }
+            let d = KINECT_FB / z as f64 / step + 0.5 * key.normal(i as u64);
+            let k = d.round().max(1.0);
+            quantise_png(KINECT_FB / (k * step), units)
+        })
+        .collect();
+    DepthImage {
+        width: depth.width,
+        height: depth.height,
+        data,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn smooth_field_reaches_one_and_varies_slowly() {
+        let f = SmoothField::new(NoiseKey::new(5, 0, Stream::Range), 640, 480);
+        let mut max = 0.0f64;
+        let mut step = 0.0f64;
+        for v in 0..480 {
+            for u in 0..640 {
+                let a = f.at(u, v);
+                assert!(a.abs() <= 1.0 + 1e-12);
+                max = max.max(a.abs());
+                if u > 0 {
+                    step = step.max((a - f.at(u - 1, v)).abs());
+                }
+            }
+        }
+        assert!((max - 1.0).abs() < 1e-12, "{max}");
+        // Periods of at least an image width: a pixel moves it by at most 6 x 1.5 x 2 pi / 640
+        // before normalisation.
+        assert!(step < 0.2, "{step}");
+    }
+}
