@@ -2,6 +2,7 @@
 //! files, shows progress and prints reports; all the work lives in the library crates
 //! (`slam-core`, `ate-eval`, `datasets`, `synth`).
 
+mod ablation;
 mod analysis;
 mod commands;
 mod config_file;

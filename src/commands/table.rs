@@ -118,6 +118,23 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
             all.push_str(&t.markdown);
             resilience_figures(dir, family, list)?;
         }
+        let paper = |seq: &str| {
+            let row = catalog.get(seq).ok()?.imitates.as_deref()?;
+            let ate = catalog.get(row).ok()?.paper.as_ref()?.orb_slam2?.metres()?;
+            Some((row.to_string(), ate))
+        };
+        for (chain, t) in crate::ablation::tables(&curves, paper) {
+            let stem = format!("ablation-{}", chain.name());
+            write_table(dir, &stem, &t)?;
+            index.push((
+                stem,
+                format!(
+                    "what each member of {chain} accounts for: alone, and the chain without it"
+                ),
+            ));
+            all.push('\n');
+            all.push_str(&t.markdown);
+        }
     }
     write_atomic(&dir.join("tables.md"), all.as_bytes())?;
     figures_for(dir, &records, &labels)?;

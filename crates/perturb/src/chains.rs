@@ -5,8 +5,15 @@
 //! twice as bad.
 //!
 //! Members are listed in the order a real sensor applies them: shadows where the projector
-//! cannot see, disparity rounding, the depth conversion's distortion and scale, registration to
-//! colour; then the calibration the system is given; then the ground truth's own errors.
+//! cannot see, the depth conversion's distortion and scale, registration to colour; then the
+//! calibration the system is given; then the ground truth's own errors.
+//!
+//! Left out, because the twins render them already (`synth::catalog::twins`), so a chain on a
+//! twin would count them twice: `disparity-quantization` (the twins' Kinect depth model rounds
+//! disparity to 1/8 px after Nguyen's axial noise, as ICL-NUIM's simulator does) and
+//! `gt-jitter` (the twins' ground truth carries the white motion-capture noise measured on the
+//! real files: 0.2 mm per axis for TUM, from fr2_desk's `groundtruth.txt`; 1 mm for EuRoC's
+//! Vicon). Both families stay for inputs that lack them.
 
 use crate::family::{Family, Perturbation};
 use std::fmt;
@@ -38,9 +45,6 @@ pub enum NamedChain {
 
 const SHADOW: &str = "Kinect v1 projector-to-IR-camera baseline 7.5 cm (Khoshelham & Elberink, \
     Sensors 2012; ROS kinect_calibration/technical)";
-const QUANT: &str = "disparity in 1/8 px (Khoshelham & Elberink 2012); jitter before rounding \
-    as ICL-NUIM's simulator (Handa et al., ICRA 2014). The twins' renderer already rounds to \
-    1/8 px without jitter";
 const DISTORT: &str = "estimate: accurate to about 3 m, distortion growing beyond (Teichman, \
     Miller & Thrun, RSS 2013); about 1-2 % below 3 m (Herrera et al., PAMI 2012)";
 const REGISTER: &str = "estimate: no measured figure found; ICL-NUIM shifts depth by 0.5 px \
@@ -53,8 +57,6 @@ const DIST_LEFT: &str = "estimate: a tenth of the radial model left out (no publ
     uncertainty of TUM's k1, k2, k3 found)";
 const GT_OFFSET: &str = "estimate: TUM calls its 100 Hz motion capture time-synchronised \
     (Sturm et al., IROS 2012) without a residual; a few ms";
-const GT_JITTER: &str = "estimate: motion capture accurate to about 1 mm (Sturm et al. 2012; \
-    the twins already add their own mocap noise)";
 const HAND_EYE: &str = "estimate: a hand-eye calibration off by a few mm and below 1 degree";
 
 const FR1: &[Member] = &[
@@ -62,11 +64,6 @@ const FR1: &[Member] = &[
         family: Family::IrShadow,
         level: 1.0,
         source: SHADOW,
-    },
-    Member {
-        family: Family::DisparityQuantization,
-        level: 1.0,
-        source: QUANT,
     },
     Member {
         family: Family::DepthDistortion,
@@ -106,11 +103,6 @@ const FR1: &[Member] = &[
         source: GT_OFFSET,
     },
     Member {
-        family: Family::GtJitter,
-        level: 1.0,
-        source: GT_JITTER,
-    },
-    Member {
         family: Family::GtHandEye,
         level: 1.0,
         source: HAND_EYE,
@@ -122,11 +114,6 @@ const FR2: &[Member] = &[
         family: Family::IrShadow,
         level: 1.0,
         source: SHADOW,
-    },
-    Member {
-        family: Family::DisparityQuantization,
-        level: 1.0,
-        source: QUANT,
     },
     Member {
         family: Family::DepthDistortion,
@@ -166,11 +153,6 @@ const FR2: &[Member] = &[
         source: GT_OFFSET,
     },
     Member {
-        family: Family::GtJitter,
-        level: 1.0,
-        source: GT_JITTER,
-    },
-    Member {
         family: Family::GtHandEye,
         level: 1.0,
         source: HAND_EYE,
@@ -183,11 +165,6 @@ const FR3: &[Member] = &[
         level: 1.0,
         source: "the Xtion's PrimeSense design, projector-camera baseline taken as the \
             Kinect's 7.5 cm (estimate)",
-    },
-    Member {
-        family: Family::DisparityQuantization,
-        level: 1.0,
-        source: QUANT,
     },
     Member {
         family: Family::DepthDistortion,
@@ -213,11 +190,6 @@ const FR3: &[Member] = &[
         family: Family::GtOffset,
         level: 3.0,
         source: GT_OFFSET,
-    },
-    Member {
-        family: Family::GtJitter,
-        level: 1.0,
-        source: GT_JITTER,
     },
     Member {
         family: Family::GtHandEye,
@@ -249,11 +221,6 @@ const EUROC: &[Member] = &[
         source: "estimate: EuRoC's ground truth is a batch fit of Vicon / Leica and IMU with \
             its time offset estimated (sensor.yaml of state_groundtruth_estimate0); residual \
             not published",
-    },
-    Member {
-        family: Family::GtJitter,
-        level: 1.0,
-        source: "Vicon and Leica MS50 'mm accuracy' (Burri et al., IJRR 2016)",
     },
     Member {
         family: Family::GtHandEye,
