@@ -62,6 +62,7 @@ pub struct LoadOptions {
 pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Sequence> {
     let (mut seq, frames) = open(source, catalog, opts)?;
     seq.frames = frames
+        .without_colour()
         .read_all()
         .with_context(|| format!("loading {}", source.label()))?;
     Ok(seq)

@@ -520,3 +520,64 @@ fn match_bisects_to_a_target_and_says_when_it_is_out_of_reach() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_perturbed_copy_of_a_colour_folder_stays_in_colour_and_level_zero_is_the_input() {
+    let dir = tmpdir("perturb-colour");
+    let src = dir.join("src");
+    noisefree_ok(&[
+        "synth",
+        "--preset",
+        "kinect",
+        "--frames",
+        "3",
+        "--seed",
+        "0",
+        "--out",
+        src.to_str().unwrap(),
+    ]);
+    let first_rgb = |d: &Path| -> image::RgbImage {
+        let list = std::fs::read_to_string(d.join("rgb.txt")).unwrap();
+        let file = list
+            .lines()
+            .find(|l| !l.starts_with('#'))
+            .unwrap()
+            .split_whitespace()
+            .nth(1)
+            .unwrap()
+            .to_string();
+        let img = image::open(d.join(file)).unwrap();
+        assert!(img.color().has_color(), "{}", d.display());
+        img.into_rgb8()
+    };
+    for (chain, name) in [("depth-axial:0", "zero"), ("kinect-fr3:1", "chain")] {
+        let out = dir.join(name);
+        noisefree_ok(&[
+            "perturb",
+            "--path",
+            src.to_str().unwrap(),
+            "--perturb",
+            chain,
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        // Neither a depth, a calibration nor a ground-truth family touches a colour byte.
+        assert_eq!(first_rgb(&src), first_rgb(&out), "{chain}");
+        let list = std::fs::read_to_string(out.join("rgb.txt")).unwrap();
+        assert!(list.starts_with("# colour images"), "{list}");
+    }
+    let noisy = dir.join("noisy");
+    noisefree_ok(&[
+        "perturb",
+        "--path",
+        src.to_str().unwrap(),
+        "--perturb",
+        "image-noise:4",
+        "-o",
+        noisy.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_ne!(first_rgb(&src), first_rgb(&noisy));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -18,6 +18,7 @@ pub fn frame_input(frame: &SynthFrame) -> FrameInput {
         image: Arc::new(frame.gray.clone()),
         depth: frame.depth.clone().map(Arc::new),
         right: frame.right.clone().map(Arc::new),
+        colour: None,
     }
 }
 

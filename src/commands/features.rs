@@ -95,6 +95,7 @@ pub fn run(args: FeaturesArgs) -> anyhow::Result<()> {
         image: Arc::new(image),
         depth,
         right,
+        colour: None,
     };
     let mut extractor = OrbExtractor::new(cfg);
     let start = std::time::Instant::now();

@@ -161,7 +161,7 @@ pub fn run(args: MatchArgs) -> Result<()> {
         bail!("{label} has no ground truth: there is no ATE to match");
     }
     let (w, h) = (seq.camera.width as usize, seq.camera.height as usize);
-    let frames = remembering(frames, w * h * 5, 3 << 30);
+    let frames = remembering(frames, w * h * 8, 3 << 30);
     let mut config = base_config(seq.camera.sensor);
     if let Some(p) = &args.config {
         config = overlay_file(&config, p)?;

@@ -211,6 +211,7 @@ pub fn run(args: RunArgs) -> Result<()> {
         Some(frames)
     } else {
         seq.frames = frames
+            .without_colour()
             .read_all()
             .with_context(|| format!("loading {label}"))?;
         None

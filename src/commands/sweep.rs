@@ -525,7 +525,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
             // Several points read the same input frames: decode (or render) each once.
             let base_frames = if by_point.len() > 1 {
                 let (w, h) = (seq.camera.width as usize, seq.camera.height as usize);
-                remembering(base_frames, w * h * 5, FRAME_MEMORY_BUDGET)
+                remembering(base_frames, w * h * 8, FRAME_MEMORY_BUDGET)
             } else {
                 base_frames
             };

@@ -8,7 +8,7 @@
 
 use crate::DatasetError;
 use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
-use slam_core::{DepthImage, GrayImage};
+use slam_core::{ColourImage, DepthImage, GrayImage};
 use std::io::Cursor;
 use std::path::Path;
 
@@ -111,12 +111,7 @@ pub fn read_image(path: &Path) -> Result<DynamicImage, DatasetError> {
     decode(path, &bytes, None)
 }
 
-/// BT.601 luma in 14-bit fixed point with rounding (the constants OpenCV uses), so grey values
-/// match what ORB-SLAM2 sees for the same colour PNG.
-#[inline]
-pub fn rgb_to_gray(r: u8, g: u8, b: u8) -> u8 {
-    ((r as u32 * 4899 + g as u32 * 9617 + b as u32 * 1868 + (1 << 13)) >> 14) as u8
-}
+pub use slam_core::rgb_to_gray;
 
 /// Decodes a PNG (grey, grey+alpha, RGB or RGBA; 8 or 16 bit) into an 8-bit grey image.
 pub fn read_gray(path: &Path) -> Result<GrayImage, DatasetError> {
@@ -148,6 +143,49 @@ pub fn read_gray(path: &Path) -> Result<GrayImage, DatasetError> {
         height: h,
         data,
     })
+}
+
+/// Decodes a PNG into its 8-bit grey image (as [`read_gray`]) and, when it has colour
+/// channels, its 8-bit RGB image (alpha dropped; 16-bit channels to 8 as `image` converts them):
+/// the grey is the colour's luma, bit for bit what [`read_gray`] gives.
+pub fn read_gray_and_colour(path: &Path) -> Result<(GrayImage, Option<ColourImage>), DatasetError> {
+    let img = open(path)?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let rgb = match img {
+        DynamicImage::ImageLuma8(b) => {
+            let grey = GrayImage {
+                width: w,
+                height: h,
+                data: b.into_raw(),
+            };
+            return Ok((grey, None));
+        }
+        DynamicImage::ImageRgb8(b) => b.into_raw(),
+        other if other.color().has_color() => other.to_rgb8().into_raw(),
+        other => {
+            // Grey with alpha or 16-bit grey: no colour to keep.
+            let data = other
+                .to_rgb8()
+                .into_raw()
+                .chunks_exact(3)
+                .map(|p| rgb_to_gray(p[0], p[1], p[2]))
+                .collect();
+            return Ok((
+                GrayImage {
+                    width: w,
+                    height: h,
+                    data,
+                },
+                None,
+            ));
+        }
+    };
+    let colour = ColourImage {
+        width: w,
+        height: h,
+        data: rgb,
+    };
+    Ok((colour.to_gray(), Some(colour)))
 }
 
 /// Decodes a 16-bit single-channel depth PNG; value / `depth_factor` is metres, 0 is no depth.

@@ -370,6 +370,7 @@ pub fn open_euroc_with(
             image: Arc::new(rect.rectify_left(&l)),
             depth: None,
             right: Some(Arc::new(rect.rectify_right(&r))),
+            colour: None,
         })
     });
     let gt_path = mav0.join("state_groundtruth_estimate0/data.csv");

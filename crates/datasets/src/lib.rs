@@ -92,7 +92,7 @@ pub fn open_path_with_settings(
 /// Loads any TUM RGB-D or EuRoC folder with default options, detecting its layout.
 pub fn load_path(dir: &Path) -> Result<Sequence, DatasetError> {
     let (mut seq, frames) = open_path(dir)?;
-    seq.frames = frames.read_all()?;
+    seq.frames = frames.without_colour().read_all()?;
     Ok(seq)
 }
 

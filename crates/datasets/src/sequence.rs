@@ -4,7 +4,9 @@
 //! Memory: a 640x480 TUM frame holds 307 KB of grey (u8) plus 1.23 MB of depth (f32), about
 //! 1.5 MB per frame, so fr2_coke's ~2500 frames take ~3.8 GB; an EuRoC 752x480 stereo frame holds
 //! 0.72 MB (two u8 images), ~2.7 GB for MH01's 3682 frames. Cloning a `Sequence` is cheap
-//! (images are `Arc`s); load it once and hand clones or references to each run.
+//! (images are `Arc`s); load it once and hand clones or references to each run. A colour frame
+//! read through a [`FrameReader`] also holds its colour image (0.9 MB at 640x480), which a
+//! loaded `Sequence` drops ([`FrameReader::without_colour`]).
 
 use std::sync::Arc;
 
@@ -151,5 +153,14 @@ impl FrameReader {
     /// Every frame, read in parallel.
     pub fn read_all(&self) -> Result<Vec<FrameInput>, DatasetError> {
         self.read_range(0..self.len)
+    }
+
+    /// The same frames without their colour images: what tracking needs, for a consumer that
+    /// holds many frames at once (a loaded [`Sequence`]).
+    pub fn without_colour(&self) -> FrameReader {
+        let inner = self.clone();
+        FrameReader::new(self.len, move |i| {
+            inner.read(i).map(FrameInput::without_colour)
+        })
     }
 }

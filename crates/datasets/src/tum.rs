@@ -4,7 +4,7 @@
 //! Images are decoded in parallel with rayon; frame order is the rgb time order.
 
 use crate::cameras::CameraId;
-use crate::decode::{read_depth, read_gray};
+use crate::decode::{read_depth, read_gray, read_gray_and_colour};
 use crate::{DatasetError, Format, FrameReader, Sequence};
 use slam_core::{Camera, FrameInput};
 use std::path::{Path, PathBuf};
@@ -210,7 +210,7 @@ pub fn pairs(dir: &Path, max_difference: f64) -> Result<Vec<(ListEntry, ListEntr
 /// Loads a TUM RGB-D folder with explicit options.
 pub fn load_tum_with(dir: &Path, opts: &TumOptions) -> Result<Sequence, DatasetError> {
     let (mut seq, frames) = open_tum_with(dir, opts)?;
-    seq.frames = frames.read_all()?;
+    seq.frames = frames.without_colour().read_all()?;
     Ok(seq)
 }
 
@@ -267,7 +267,7 @@ pub fn open_tum_with(
         let (rgb, depth) = &pairs[i];
         let rgb_path = folder.join(&rgb.file);
         let depth_path = folder.join(&depth.file);
-        let image = read_gray(&rgb_path)?;
+        let (image, colour) = read_gray_and_colour(&rgb_path)?;
         check_size(&rgb_path, image.width, image.height, w, h, "the camera")?;
         let d = read_depth(&depth_path, depth_factor)?;
         check_size(
@@ -283,6 +283,7 @@ pub fn open_tum_with(
             image: Arc::new(image),
             depth: Some(Arc::new(d)),
             right: None,
+            colour: colour.map(Arc::new),
         })
     });
 

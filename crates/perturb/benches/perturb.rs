@@ -30,6 +30,7 @@ fn frame(w: usize, h: usize, stereo: bool) -> FrameInput {
             })
         }),
         right: stereo.then_some(img),
+        colour: None,
     }
 }
 

@@ -123,8 +123,12 @@ impl Perturber {
                     }
                 }
                 Domain::Image => {
-                    let one = |img: &slam_core::GrayImage, stream: Stream| match p.family {
-                        Family::ImageNoise => image::noise(img, p.level, key(stream)),
+                    let one = |img: &slam_core::GrayImage, stream: Stream, channel: u64| match p
+                        .family
+                    {
+                        Family::ImageNoise => {
+                            image::noise(img, p.level, channel_key(key(stream), channel))
+                        }
                         Family::MotionBlur => {
                             // One direction per frame, shared by both cameras of a rig.
                             let angle = key(Stream::Mocap).uniform(0) * std::f64::consts::PI;
@@ -136,9 +140,27 @@ impl Perturber {
                         Family::Jpeg => image::jpeg(img, p.level as u8),
                         _ => img.clone(),
                     };
-                    f.image = Arc::new(one(&f.image, Stream::ImageLeft));
+                    match &f.colour {
+                        // A colour camera: each channel (JPEG: the colour image), then grey
+                        // as a reader makes it.
+                        Some(c) => {
+                            let c = if p.family == Family::Jpeg {
+                                image::jpeg_colour(c, p.level as u8)
+                            } else {
+                                let [r, g, b] = image::planes(c);
+                                image::interleave(&[
+                                    one(&r, Stream::ImageLeft, 1),
+                                    one(&g, Stream::ImageLeft, 2),
+                                    one(&b, Stream::ImageLeft, 3),
+                                ])
+                            };
+                            f.image = Arc::new(c.to_gray());
+                            f.colour = Some(Arc::new(c));
+                        }
+                        None => f.image = Arc::new(one(&f.image, Stream::ImageLeft, 0)),
+                    }
                     if let Some(r) = &f.right {
-                        f.right = Some(Arc::new(one(r, Stream::ImageRight)));
+                        f.right = Some(Arc::new(one(r, Stream::ImageRight, 0)));
                     }
                 }
                 Domain::Time => {
@@ -153,22 +175,27 @@ impl Perturber {
                     let mut img = (*f.image).clone();
                     let mut dep = f.depth.as_deref().cloned();
                     let mut right = f.right.as_deref().cloned();
+                    let mut colour = f.colour.as_deref().cloned();
                     occluders::draw(
                         &objects,
                         t,
                         &self.camera,
                         self.units,
-                        &mut img,
-                        dep.as_mut(),
-                        if self.camera.sensor == SensorKind::Stereo {
-                            right.as_mut()
-                        } else {
-                            None
+                        occluders::Canvas {
+                            image: &mut img,
+                            depth: dep.as_mut(),
+                            right: if self.camera.sensor == SensorKind::Stereo {
+                                right.as_mut()
+                            } else {
+                                None
+                            },
+                            colour: colour.as_mut(),
                         },
                     );
                     f.image = Arc::new(img);
                     f.depth = dep.map(Arc::new);
                     f.right = right.map(Arc::new);
+                    f.colour = colour.map(Arc::new);
                 }
                 Domain::Stereo => {
                     if let Some(r) = &f.right {
@@ -182,6 +209,15 @@ impl Perturber {
         }
         Ok(f)
     }
+}
+
+/// The key of colour channel `channel` (1-3; 0: the grey image itself, its key unchanged), so
+/// each channel of a colour image draws its own noise.
+fn channel_key(key: NoiseKey, channel: u64) -> NoiseKey {
+    if channel == 0 {
+        return key;
+    }
+    NoiseKey::new(key.bits(0x4348_414e ^ channel), 0, Stream::ImageLeft)
 }
 
 /// The member seed of a chain's member at `position` of `family` under perturbation seed

@@ -4,8 +4,9 @@
 //! `mav0/cam1` with `data.csv` and a rectified-pinhole `sensor.yaml`,
 //! `state_groundtruth_estimate0/data.csv`). Beside them: `camera-orbslam2.yaml` and
 //! `camera-orbslam3.yaml` (the sequence's camera as ORB-SLAM2 / ORB-SLAM3 settings, which
-//! `noisefree run --path DIR --camera` reads back). Images are 8-bit grey PNGs (what slam-core
-//! sees), depth 16-bit PNGs on the sequence's own depth grid, stamps and poses with every digit,
+//! `noisefree run --path DIR --camera` reads back). Images keep the input's pixel format: 8-bit
+//! RGB PNGs where the input had colour (whose grey, as the readers make it, is what slam-core
+//! saw), 8-bit grey PNGs otherwise; depth 16-bit PNGs on the sequence's own depth grid, stamps and poses with every digit,
 //! so noisefree reading the folder gets the same bits it wrote. Everything goes to a staging
 //! folder renamed into place at the end: no half-written folder looks complete.
 
@@ -169,18 +170,28 @@ fn write_tum(
         std::fs::create_dir_all(root.join(d)).map_err(|e| werr(&root.join(d), e))?;
     }
     let done = AtomicUsize::new(0);
-    let stamps: Vec<f64> = (0..frames.len())
+    let stamps: Vec<(f64, bool)> = (0..frames.len())
         .into_par_iter()
-        .map(|i| -> Result<f64, PerturbError> {
+        .map(|i| -> Result<(f64, bool), PerturbError> {
             let f = frames.read(i)?;
             let file = format!("{:06}.png", i);
-            png(
-                &root.join("rgb").join(&file),
-                &f.image.data,
-                f.image.width,
-                f.image.height,
-                ExtendedColorType::L8,
-            )?;
+            // Colour stays colour (its grey, as a reader makes it, is what slam-core saw).
+            match &f.colour {
+                Some(c) => png(
+                    &root.join("rgb").join(&file),
+                    &c.data,
+                    c.width,
+                    c.height,
+                    ExtendedColorType::Rgb8,
+                )?,
+                None => png(
+                    &root.join("rgb").join(&file),
+                    &f.image.data,
+                    f.image.width,
+                    f.image.height,
+                    ExtendedColorType::L8,
+                )?,
+            }
             let d = f
                 .depth
                 .as_ref()
@@ -203,11 +214,16 @@ fn write_tum(
                 ExtendedColorType::L16,
             )?;
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-            Ok(f.timestamp)
+            Ok((f.timestamp, f.colour.is_some()))
         })
-        .collect::<Result<_, _>>()?;
+        .collect::<Result<Vec<_>, _>>()?;
+    let colour = stamps.first().is_some_and(|s| s.1);
+    let stamps: Vec<f64> = stamps.into_iter().map(|s| s.0).collect();
     let (mut rgb, mut depth, mut assoc) = (
-        String::from("# grey images (noisefree perturb)\n# timestamp filename\n"),
+        format!(
+            "# {} images (noisefree perturb)\n# timestamp filename\n",
+            if colour { "colour" } else { "grey" }
+        ),
         String::from("# depth maps (noisefree perturb)\n# timestamp filename\n"),
         String::new(),
     );

@@ -1,8 +1,10 @@
 //! The image families on one 8-bit grey image: sensor noise (synth's CMOS shot + read noise
-//! model), motion blur, exposure flicker and JPEG compression.
+//! model), motion blur, exposure flicker and JPEG compression; and on a colour image, as a
+//! colour camera would: noise, blur and gain on each channel, JPEG on the colour image (its
+//! YCbCr with subsampled chroma), the grey image then the colour's luma.
 
 use rayon::prelude::*;
-use slam_core::GrayImage;
+use slam_core::{ColourImage, GrayImage};
 use synth::hash::NoiseKey;
 use synth::sensor::imaging::SensorNoise;
 
@@ -145,6 +147,55 @@ pub fn jpeg(img: &GrayImage, quality: u8) -> GrayImage {
             }
         }
         // An in-memory encoder of an in-memory image does not fail; keep the frame if it does.
+        _ => img.clone(),
+    }
+}
+
+/// The three channels of a colour image as grey planes (R, G, B).
+pub fn planes(c: &ColourImage) -> [GrayImage; 3] {
+    std::array::from_fn(|k| GrayImage {
+        width: c.width,
+        height: c.height,
+        data: c.data.iter().skip(k).step_by(3).copied().collect(),
+    })
+}
+
+/// The colour image of three grey planes (R, G, B) of one size.
+pub fn interleave(p: &[GrayImage; 3]) -> ColourImage {
+    let mut data = Vec::with_capacity(p[0].data.len() * 3);
+    for i in 0..p[0].data.len() {
+        data.extend([p[0].data[i], p[1].data[i], p[2].data[i]]);
+    }
+    ColourImage {
+        width: p[0].width,
+        height: p[0].height,
+        data,
+    }
+}
+
+/// Encodes a colour image as a baseline JPEG of `quality` (1-100) and decodes it again.
+pub fn jpeg_colour(img: &ColourImage, quality: u8) -> ColourImage {
+    use ::image::codecs::jpeg::JpegEncoder;
+    use ::image::ExtendedColorType;
+    let mut bytes = Vec::new();
+    let encoded = JpegEncoder::new_with_quality(&mut bytes, quality.clamp(1, 100)).encode(
+        &img.data,
+        img.width as u32,
+        img.height as u32,
+        ExtendedColorType::Rgb8,
+    );
+    let decoded = encoded
+        .ok()
+        .and_then(|_| ::image::load_from_memory(&bytes).ok())
+        .map(|d| d.into_rgb8());
+    match decoded {
+        Some(d) if d.width() as usize == img.width && d.height() as usize == img.height => {
+            ColourImage {
+                width: img.width,
+                height: img.height,
+                data: d.into_raw(),
+            }
+        }
         _ => img.clone(),
     }
 }

@@ -9,7 +9,7 @@
 //! shifted by its disparity bf / z (stereo sequences carry no depth, so it is always in front).
 //! Objects are drawn far to near, so a nearer one hides a farther one.
 
-use slam_core::{Camera, DepthImage, GrayImage};
+use slam_core::{Camera, ColourImage, DepthImage, GrayImage};
 use synth::hash::{NoiseKey, Stream};
 use synth::sensor::depth::quantise_png;
 
@@ -80,6 +80,19 @@ impl Occluder {
     }
 }
 
+/// What [`draw`] draws into: the (left) grey image, and where the frame has them its depth
+/// (RGB-D), right image (stereo) and colour image (drawn as the grey texture, r = g = b).
+pub struct Canvas<'a> {
+    /// The grey (left) image.
+    pub image: &'a mut GrayImage,
+    /// The depth image (RGB-D).
+    pub depth: Option<&'a mut DepthImage>,
+    /// The right image (stereo).
+    pub right: Option<&'a mut GrayImage>,
+    /// The colour image the grey one is the luma of.
+    pub colour: Option<&'a mut ColourImage>,
+}
+
 /// Draws `objects` at time `t` into a frame: `image` (left), optionally `depth` (RGB-D, on the
 /// PNG grid of `units` per metre) or `right` (stereo, shifted by the disparity `bf / z`).
 /// Returns the number of left-image pixels drawn.
@@ -88,10 +101,14 @@ pub fn draw(
     t: f64,
     camera: &Camera,
     units: f64,
-    image: &mut GrayImage,
-    mut depth: Option<&mut DepthImage>,
-    mut right: Option<&mut GrayImage>,
+    canvas: Canvas<'_>,
 ) -> usize {
+    let Canvas {
+        image,
+        mut depth,
+        mut right,
+        mut colour,
+    } = canvas;
     let (w, h) = (image.width, image.height);
     let mut drawn = 0;
     for o in objects {
@@ -130,6 +147,10 @@ pub fn draw(
                     }
                 }
                 image.data[i] = g;
+                if let Some(c) = colour.as_deref_mut() {
+                    // A grey texture: its luma is g again.
+                    c.data[3 * i..3 * i + 3].fill(g);
+                }
                 drawn += 1;
             }
         }

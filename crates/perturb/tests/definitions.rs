@@ -55,6 +55,7 @@ fn rgbd(
             data: (0..w * h).map(|i| q(depth(i % w, i / w))).collect(),
         })),
         right: None,
+        colour: None,
     }
 }
 
@@ -318,6 +319,7 @@ fn occluders_have_the_depth_of_their_surface_where_drawn() {
         image: Arc::new(GrayImage::new(640, 480)),
         depth: None,
         right: Some(Arc::new(GrayImage::new(640, 480))),
+        colour: None,
     });
     let f = perturbed(&st, "occluders:1", 2).read(3).unwrap();
     let (l, rt) = (&f.image.data, &f.right.as_ref().unwrap().data);
@@ -361,6 +363,7 @@ fn stereo_misalignment_moves_rows_by_f_tan_theta() {
             image: Arc::new(img.clone()),
             depth: None,
             right: Some(Arc::new(img)),
+            colour: None,
         }
     };
     let s = sequence(cam.clone(), 1, line);

@@ -30,6 +30,7 @@ fn frame(w: usize, h: usize, t: f64, depth: impl Fn(usize, usize) -> f64) -> Fra
             data: (0..w * h).map(|i| q(depth(i % w, i / w))).collect(),
         })),
         right: None,
+        colour: None,
     }
 }
 
@@ -432,4 +433,94 @@ fn an_ablation_has_the_chain_each_member_alone_and_the_chain_without_each() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("a member of kinect-fr3"), "{e}");
+}
+
+/// A frame with colour: a different pattern per channel, the grey its luma.
+fn coloured(s: &(Sequence, FrameReader)) -> (Sequence, FrameReader) {
+    let inner = s.1.clone();
+    let reader = FrameReader::new(inner.len(), move |i| {
+        let mut f = inner.read(i)?;
+        let (w, h) = (f.image.width, f.image.height);
+        let data: Vec<u8> = (0..w * h)
+            .flat_map(|p| {
+                let (x, y) = (p % w, p / w);
+                [
+                    ((x * 3 + y) % 256) as u8,
+                    ((x + 5 * y) % 200 + 20) as u8,
+                    ((x * y) % 97 + 100) as u8,
+                ]
+            })
+            .collect();
+        let c = slam_core::ColourImage {
+            width: w,
+            height: h,
+            data,
+        };
+        f.image = Arc::new(c.to_gray());
+        f.colour = Some(Arc::new(c));
+        Ok(f)
+    });
+    (s.0.clone(), reader)
+}
+
+#[test]
+fn colour_stays_colour_and_level_zero_keeps_every_colour_byte() {
+    let s = coloured(&sequence(Camera::tum_fr1(), 2, |_, x, _| {
+        1.0 + x as f64 * 0.001
+    }));
+    let names: Vec<&str> = Family::ALL
+        .iter()
+        .filter(|f| f.applies_to(SensorKind::Rgbd))
+        .map(|f| f.name())
+        .collect();
+    for name in names {
+        let level = if name == "frame-drop" { 1 } else { 0 };
+        let (_, r) = apply(&s, &format!("{name}:{level}"), 5);
+        let (a, b) = (r.read(1).unwrap(), s.1.read(1).unwrap());
+        assert_eq!(a.colour.unwrap().data, b.colour.unwrap().data, "{name}");
+    }
+    // Depth, calibration and ground-truth families leave the colour as it is.
+    let (_, r) = apply(&s, "kinect-fr1:1", 5);
+    assert_eq!(
+        r.read(0).unwrap().colour.unwrap().data,
+        s.1.read(0).unwrap().colour.unwrap().data
+    );
+    // The image families act on the colour; the grey is its luma.
+    for chain in [
+        "image-noise:6",
+        "motion-blur:5",
+        "exposure:20",
+        "jpeg:30",
+        "occluders:2",
+    ] {
+        let (_, r) = apply(&s, chain, 5);
+        let f = r.read(1).unwrap();
+        let c = f.colour.clone().unwrap();
+        assert_eq!(f.image.data, c.to_gray().data, "{chain}");
+        assert_ne!(c.data, s.1.read(1).unwrap().colour.unwrap().data, "{chain}");
+    }
+    // Noise is drawn per channel: a grey-constant patch gets three different noises.
+    let (_, r) = apply(&s, "image-noise:8", 1);
+    let c = r.read(0).unwrap().colour.unwrap();
+    let clean = s.1.read(0).unwrap().colour.unwrap();
+    let diff = |k: usize| -> Vec<i32> {
+        (0..2000)
+            .map(|p| c.data[3 * p + k] as i32 - clean.data[3 * p + k] as i32)
+            .collect()
+    };
+    assert_ne!(diff(0), diff(1));
+    assert_ne!(diff(1), diff(2));
+    // Occluders draw grey textures: drawn pixels are (g, g, g).
+    let (_, r) = apply(&s, "occluders:3", 2);
+    let (f, clean) = (r.read(0).unwrap(), s.1.read(0).unwrap());
+    let c = f.colour.unwrap();
+    let drawn: Vec<usize> = (0..f.image.data.len())
+        .filter(|&p| {
+            c.data[3 * p..3 * p + 3] != clean.colour.as_ref().unwrap().data[3 * p..3 * p + 3]
+        })
+        .collect();
+    assert!(!drawn.is_empty());
+    assert!(drawn
+        .iter()
+        .all(|&p| c.data[3 * p] == c.data[3 * p + 1] && c.data[3 * p + 1] == c.data[3 * p + 2]));
 }

@@ -190,6 +190,7 @@ fn stereo(c: &mut Criterion) {
         image: Arc::new(left),
         depth: None,
         right: Some(Arc::new(right)),
+        colour: None,
     };
     let mut ex = OrbExtractor::new(OrbConfig::stereo());
     let f = Frame::new(0, &input, &camera, &mut ex);

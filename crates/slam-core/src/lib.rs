@@ -33,4 +33,4 @@ pub mod system;
 pub mod techniques;
 
 pub use camera::{Camera, Distortion, SensorKind};
-pub use image::{DepthImage, FrameInput, GrayImage};
+pub use image::{rgb_to_gray, ColourImage, DepthImage, FrameInput, GrayImage};

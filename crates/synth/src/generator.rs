@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 
 use nalgebra::{Isometry3, Translation3};
-use slam_core::{Camera, DepthImage, FrameInput, GrayImage};
+use slam_core::{Camera, ColourImage, DepthImage, FrameInput, GrayImage};
 
 use crate::error::SynthError;
 use crate::hash::{NoiseKey, Stream};
@@ -50,14 +50,22 @@ pub struct SynthFrame {
 }
 
 impl SynthFrame {
-    /// What a SLAM system is given of this frame (grey image, measured depth or right image);
-    /// the ground-truth fields are dropped.
+    /// What a SLAM system is given of this frame (grey image, measured depth or right image,
+    /// and the colour image the grey one is the luma of); the ground-truth fields are dropped.
     pub fn into_input(self) -> FrameInput {
+        let (width, height) = (self.gray.width, self.gray.height);
         FrameInput {
             timestamp: self.timestamp,
             image: Arc::new(self.gray),
             depth: self.depth.map(Arc::new),
             right: self.right.map(Arc::new),
+            colour: self.rgb.map(|data| {
+                Arc::new(ColourImage {
+                    width,
+                    height,
+                    data,
+                })
+            }),
         }
     }
 }

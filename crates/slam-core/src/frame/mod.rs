@@ -321,6 +321,7 @@ mod tests {
             image: Arc::new(img),
             depth: Some(Arc::new(depth)),
             right: None,
+            colour: None,
         }
     }
 
@@ -525,6 +526,7 @@ mod golden {
                 image: Arc::new(left),
                 depth: None,
                 right: Some(Arc::new(right)),
+                colour: None,
             };
             let cam = Camera::euroc_rectified();
             let mut ex = OrbExtractor::new(OrbConfig::stereo());

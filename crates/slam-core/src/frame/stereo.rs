@@ -503,6 +503,7 @@ mod tests {
             image: Arc::new(left),
             depth: None,
             right: Some(Arc::new(right)),
+            colour: None,
         };
         let cam = Camera::euroc_rectified();
         let mut ex = OrbExtractor::new(OrbConfig::stereo());

@@ -2,12 +2,12 @@
 //! renderer's code, the configuration, the seed and the frame index, so a process that needs a
 //! frame another process (or an earlier run) rendered can read it instead of rendering it
 //! again. What is kept is what a SLAM system is given of the frame (grey image, measured depth,
-//! right image, stamp) and its exact pose, bit for bit.
+//! right image, the colour image of an RGB-D frame, stamp) and its exact pose, bit for bit.
 //!
 //! Files live in a subfolder named by the code ([`CODE_FINGERPRINT`]: the sources of this crate
 //! and slam-core, the manifests and Cargo.lock, fixed at build time); the first process of a
 //! new build removes the subfolders of other builds, so a cache holds one build's frames (about
-//! 0.9 MB a 640 x 480 RGB-D frame). Each file is named by a key of the code, the machine's
+//! 1.8 MB a 640 x 480 RGB-D frame with its colour). Each file is named by a key of the code, the machine's
 //! architecture, the seed and the whole configuration, and by the frame index; it carries the
 //! key again and a checksum. A file that is missing, truncated, corrupt or of another key is
 //! ignored: the frame is rendered and the file written anew (to a temporary name, then renamed,
@@ -19,7 +19,7 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use slam_core::hash::{fnv1a, fnv1a_continue};
-use slam_core::{DepthImage, FrameInput, GrayImage};
+use slam_core::{ColourImage, DepthImage, FrameInput, GrayImage};
 
 use crate::generator::Generator;
 
@@ -38,7 +38,7 @@ pub fn cache_dir_from_env() -> Option<PathBuf> {
 }
 
 /// First bytes of a cached frame file.
-const MAGIC: &[u8; 8] = b"NFSYNTH1";
+const MAGIC: &[u8; 8] = b"NFSYNTH2";
 
 /// A generator's frames as a SLAM system gets them, read from a cache folder when they are
 /// there and rendered (and stored there) when not.
@@ -195,6 +195,15 @@ fn encode(
             gray(&mut b, r);
         }
     }
+    match &input.colour {
+        None => b.push(0),
+        Some(c) => {
+            b.push(1);
+            b.extend_from_slice(&(c.width as u32).to_le_bytes());
+            b.extend_from_slice(&(c.height as u32).to_le_bytes());
+            b.extend_from_slice(&c.data);
+        }
+    }
     let sum = fnv1a(&b);
     b.extend_from_slice(&sum.to_le_bytes());
     b
@@ -249,6 +258,19 @@ fn decode(bytes: &[u8], key: u64, index: usize) -> Option<(FrameInput, Isometry3
         1 => Some(Arc::new(r.gray()?)),
         _ => return None,
     };
+    let colour = match r.take(1)?[0] {
+        0 => None,
+        1 => {
+            let (width, height) = r.size()?;
+            let data = r.take(width.checked_mul(height)?.checked_mul(3)?)?.to_vec();
+            Some(Arc::new(ColourImage {
+                width,
+                height,
+                data,
+            }))
+        }
+        _ => return None,
+    };
     if !r.0.is_empty() {
         return None;
     }
@@ -257,6 +279,7 @@ fn decode(bytes: &[u8], key: u64, index: usize) -> Option<(FrameInput, Isometry3
         image: Arc::new(image),
         depth,
         right,
+        colour,
     };
     Some((input, pose))
 }
@@ -400,6 +423,7 @@ mod tests {
             image,
             depth: Some(Arc::new(depth)),
             right: None,
+            colour: None,
         };
         let bytes = encode(7, 1, &input, &pose, 5000.0);
         assert_eq!(bytes[88 + 8 + 6], DEPTH_F32);

@@ -304,9 +304,7 @@ pub fn exposed_gray8(colour: &[[f32; 3]], ph: &Photometry, key: NoiseKey) -> Vec
 /// convert the colour PNGs), so that memory and disk give the same grey image.
 pub fn rgb_to_gray(rgb: &[u8]) -> Vec<u8> {
     rgb.par_chunks_exact(3)
-        .map(|p| {
-            ((p[0] as u32 * 4899 + p[1] as u32 * 9617 + p[2] as u32 * 1868 + 8192) >> 14) as u8
-        })
+        .map(|p| slam_core::rgb_to_gray(p[0], p[1], p[2]))
         .collect()
 }
 
