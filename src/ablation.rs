@@ -34,6 +34,11 @@ pub fn mean_ci95(x: &[f64]) -> Option<(f64, Option<f64>)> {
     Some((mean, Some(t * (var / n as f64).sqrt())))
 }
 
+/// A level as a table prints it: at most three decimals (the CSV keeps every digit).
+fn short(level: f64) -> String {
+    format!("{}", (level * 1000.0).round() / 1000.0)
+}
+
 /// One row of an ablation table: what was applied and the runs at it.
 struct Row<'a> {
     what: String,
@@ -105,7 +110,7 @@ pub fn tables(
                     share: None,
                 },
                 Row {
-                    what: format!("{chain}:{} (every member)", all.level),
+                    what: format!("{chain}:{} (every member)", short(all.level)),
                     stats: all,
                     share: None,
                 },
@@ -114,7 +119,7 @@ pub fn tables(
                 if let Some(s) = perturbed(curves, p.family.name(), &curve.sequence, &curve.system)
                 {
                     rows.push(Row {
-                        what: format!("{}:{} alone", p.family, p.level),
+                        what: format!("{}:{} alone", p.family, short(p.level)),
                         stats: s,
                         share: share(s, false),
                     });

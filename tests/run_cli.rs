@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{assert_clean_failure, noisefree, tmpdir};
+use common::{assert_clean_failure, noisefree, noisefree_ok, tmpdir};
 
 #[test]
 fn default_run_writes_outputs_and_is_reproducible() {
@@ -195,4 +195,35 @@ fn the_frame_cache_gives_the_trajectory_of_rendering() {
     std::fs::write(&victim, &bytes).unwrap();
     assert_eq!(run(&tmpdir("cache-third"), Some(&cache)), plain);
     let _ = std::fs::remove_dir_all(&cache);
+}
+
+#[test]
+fn fetch_list_lines_up_its_columns_and_names_what_each_twin_imitates() {
+    let out = noisefree_ok(&[
+        "fetch",
+        "--list",
+        "--data-dir",
+        "/nonexistent-noisefree-data",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines.len() > 20, "{text}");
+    // The class and state columns start at the same offset on every line.
+    let width = lines
+        .iter()
+        .map(|l| l.split_whitespace().next().unwrap().len())
+        .max()
+        .unwrap();
+    for l in &lines {
+        assert_eq!(&l[width..width + 1], " ", "{l:?}");
+        assert!(
+            l.len() > width + 7 && &l[width + 6..width + 7] == " ",
+            "{l:?}"
+        );
+    }
+    let twin = lines
+        .iter()
+        .find(|l| l.starts_with("twin_fr3_office "))
+        .unwrap();
+    assert!(twin.ends_with("synthetic, imitates fr3_office"), "{twin}");
 }

@@ -43,18 +43,28 @@ pub fn run(args: FetchArgs) -> anyhow::Result<()> {
     if args.list {
         use std::io::Write;
         let mut out = std::io::stdout().lock();
+        // Columns as wide as their longest entry, so every row lines up.
+        let width = catalog
+            .entries()
+            .iter()
+            .map(|e| e.name.len())
+            .max()
+            .unwrap_or(0);
         for e in catalog.entries() {
             let state = match e.path(&root) {
                 Some(p) if p.exists() => format!("present  {}", p.display()),
                 Some(_) => "missing".to_string(),
-                None => "synthetic (noisefree synth)".to_string(),
+                None => match &e.imitates {
+                    Some(row) => format!("synthetic, imitates {row}"),
+                    None => "synthetic (noisefree synth)".to_string(),
+                },
             };
             let class = e
                 .class
                 .map(|c| format!("{c:?}").to_lowercase())
                 .unwrap_or_default();
             // A closed pipe (`| head`) just ends the listing.
-            if writeln!(out, "{:<14} {:<5} {}", e.name, class, state).is_err() {
+            if writeln!(out, "{:<width$} {:<5} {}", e.name, class, state).is_err() {
                 break;
             }
         }
