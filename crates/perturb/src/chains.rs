@@ -59,174 +59,100 @@ const GT_OFFSET: &str = "estimate: TUM calls its 100 Hz motion capture time-sync
     (Sturm et al., IROS 2012) without a residual; a few ms";
 const HAND_EYE: &str = "estimate: a hand-eye calibration off by a few mm and below 1 degree";
 
+/// A member of a named chain at `level`, `source` saying where the level comes from.
+const fn member(family: Family, level: f64, source: &'static str) -> Member {
+    Member {
+        family,
+        level,
+        source,
+    }
+}
+
+const IR_SHADOW: Member = member(Family::IrShadow, 1.0, SHADOW);
+const DEPTH_DISTORTION: Member = member(Family::DepthDistortion, 1.5, DISTORT);
+const DEPTH_REGISTRATION: Member = member(Family::DepthRegistration, 1.0, REGISTER);
+const FOCAL_ERROR: Member = member(Family::FocalError, 0.5, FOCAL);
+const PRINCIPAL_POINT_ERROR: Member = member(Family::PrincipalPointError, 2.0, PP);
+const DISTORTION_ERROR: Member = member(Family::DistortionError, 0.1, DIST_LEFT);
+const GT_OFFSET_KINECT: Member = member(Family::GtOffset, 3.0, GT_OFFSET);
+const GT_HAND_EYE: Member = member(Family::GtHandEye, 1.0, HAND_EYE);
+
 const FR1: &[Member] = &[
-    Member {
-        family: Family::IrShadow,
-        level: 1.0,
-        source: SHADOW,
-    },
-    Member {
-        family: Family::DepthDistortion,
-        level: 1.5,
-        source: DISTORT,
-    },
-    Member {
-        family: Family::DepthScale,
-        level: -3.381642512,
-        source: "TUM's depth correction 1.035 for fr1 (TUM RGB-D file formats page), which \
+    IR_SHADOW,
+    DEPTH_DISTORTION,
+    member(
+        Family::DepthScale,
+        -3.381642512,
+        "TUM's depth correction 1.035 for fr1 (TUM RGB-D file formats page), which \
             ORB-SLAM2's TUM1.yaml does not apply (DepthMapFactor 5000): depth read 1/1.035 - 1 \
             = -3.38 %",
-    },
-    Member {
-        family: Family::DepthRegistration,
-        level: 1.0,
-        source: REGISTER,
-    },
-    Member {
-        family: Family::FocalError,
-        level: 0.5,
-        source: FOCAL,
-    },
-    Member {
-        family: Family::PrincipalPointError,
-        level: 2.0,
-        source: PP,
-    },
-    Member {
-        family: Family::DistortionError,
-        level: 0.1,
-        source: DIST_LEFT,
-    },
-    Member {
-        family: Family::GtOffset,
-        level: 3.0,
-        source: GT_OFFSET,
-    },
-    Member {
-        family: Family::GtHandEye,
-        level: 1.0,
-        source: HAND_EYE,
-    },
+    ),
+    DEPTH_REGISTRATION,
+    FOCAL_ERROR,
+    PRINCIPAL_POINT_ERROR,
+    DISTORTION_ERROR,
+    GT_OFFSET_KINECT,
+    GT_HAND_EYE,
 ];
 
 const FR2: &[Member] = &[
-    Member {
-        family: Family::IrShadow,
-        level: 1.0,
-        source: SHADOW,
-    },
-    Member {
-        family: Family::DepthDistortion,
-        level: 1.5,
-        source: DISTORT,
-    },
-    Member {
-        family: Family::DepthScale,
-        level: -1.017665131,
-        source: "TUM's depth correction 1.031 for fr2 against ORB-SLAM2's TUM2.yaml \
+    IR_SHADOW,
+    DEPTH_DISTORTION,
+    member(
+        Family::DepthScale,
+        -1.017665131,
+        "TUM's depth correction 1.031 for fr2 against ORB-SLAM2's TUM2.yaml \
             DepthMapFactor 5208 (1.0416): depth read 1.031 / 1.0416 - 1 = -1.02 % (the sign \
             assumed as fr1's)",
-    },
-    Member {
-        family: Family::DepthRegistration,
-        level: 1.0,
-        source: REGISTER,
-    },
-    Member {
-        family: Family::FocalError,
-        level: 0.5,
-        source: FOCAL,
-    },
-    Member {
-        family: Family::PrincipalPointError,
-        level: 2.0,
-        source: PP,
-    },
-    Member {
-        family: Family::DistortionError,
-        level: 0.1,
-        source: DIST_LEFT,
-    },
-    Member {
-        family: Family::GtOffset,
-        level: 3.0,
-        source: GT_OFFSET,
-    },
-    Member {
-        family: Family::GtHandEye,
-        level: 1.0,
-        source: HAND_EYE,
-    },
+    ),
+    DEPTH_REGISTRATION,
+    FOCAL_ERROR,
+    PRINCIPAL_POINT_ERROR,
+    DISTORTION_ERROR,
+    GT_OFFSET_KINECT,
+    GT_HAND_EYE,
 ];
 
 const FR3: &[Member] = &[
-    Member {
-        family: Family::IrShadow,
-        level: 1.0,
-        source: "the Xtion's PrimeSense design, projector-camera baseline taken as the \
+    member(
+        Family::IrShadow,
+        1.0,
+        "the Xtion's PrimeSense design, projector-camera baseline taken as the \
             Kinect's 7.5 cm (estimate)",
-    },
-    Member {
-        family: Family::DepthDistortion,
-        level: 1.5,
-        source: DISTORT,
-    },
-    Member {
-        family: Family::DepthRegistration,
-        level: 1.0,
-        source: REGISTER,
-    },
-    Member {
-        family: Family::FocalError,
-        level: 0.5,
-        source: FOCAL,
-    },
-    Member {
-        family: Family::PrincipalPointError,
-        level: 2.0,
-        source: PP,
-    },
-    Member {
-        family: Family::GtOffset,
-        level: 3.0,
-        source: GT_OFFSET,
-    },
-    Member {
-        family: Family::GtHandEye,
-        level: 1.0,
-        source: HAND_EYE,
-    },
+    ),
+    DEPTH_DISTORTION,
+    DEPTH_REGISTRATION,
+    FOCAL_ERROR,
+    PRINCIPAL_POINT_ERROR,
+    GT_OFFSET_KINECT,
+    GT_HAND_EYE,
 ];
 
 const EUROC: &[Member] = &[
-    Member {
-        family: Family::StereoMisalignment,
-        level: 0.03,
-        source: "estimate: a Kalibr stereo calibration's reprojection error of 0.1-0.3 px is \
+    member(
+        Family::StereoMisalignment,
+        0.03,
+        "estimate: a Kalibr stereo calibration's reprojection error of 0.1-0.3 px is \
             about 0.2 px / 458 px = 0.025 degrees of rotation",
-    },
-    Member {
-        family: Family::FocalError,
-        level: 0.2,
-        source: "estimate: a Kalibr calibration of a 752x480 camera, 0.1-0.3 %",
-    },
-    Member {
-        family: Family::PrincipalPointError,
-        level: 1.0,
-        source: "estimate: a Kalibr calibration, about 1 px",
-    },
-    Member {
-        family: Family::GtOffset,
-        level: 1.0,
-        source: "estimate: EuRoC's ground truth is a batch fit of Vicon / Leica and IMU with \
+    ),
+    member(
+        Family::FocalError,
+        0.2,
+        "estimate: a Kalibr calibration of a 752x480 camera, 0.1-0.3 %",
+    ),
+    member(
+        Family::PrincipalPointError,
+        1.0,
+        "estimate: a Kalibr calibration, about 1 px",
+    ),
+    member(
+        Family::GtOffset,
+        1.0,
+        "estimate: EuRoC's ground truth is a batch fit of Vicon / Leica and IMU with \
             its time offset estimated (sensor.yaml of state_groundtruth_estimate0); residual \
             not published",
-    },
-    Member {
-        family: Family::GtHandEye,
-        level: 1.0,
-        source: HAND_EYE,
-    },
+    ),
+    GT_HAND_EYE,
 ];
 
 impl NamedChain {

@@ -125,30 +125,41 @@ pub fn flicker_gain(sigma_percent: f64, key: NoiseKey) -> f64 {
 
 /// Encodes as a baseline JPEG of `quality` (1-100) and decodes it again.
 pub fn jpeg(img: &GrayImage, quality: u8) -> GrayImage {
+    let (w, h) = (img.width, img.height);
+    match jpeg_round_trip(&img.data, w, h, quality, false) {
+        Some(data) => GrayImage {
+            width: w,
+            height: h,
+            data,
+        },
+        // An in-memory encoder of an in-memory image does not fail; keep the frame if it does.
+        None => img.clone(),
+    }
+}
+
+/// `data` (grey, or RGB when `colour`) of `w x h` through a baseline JPEG of `quality` and back;
+/// `None` if the encoder or decoder fails or the size changes.
+fn jpeg_round_trip(data: &[u8], w: usize, h: usize, quality: u8, colour: bool) -> Option<Vec<u8>> {
     use ::image::codecs::jpeg::JpegEncoder;
     use ::image::ExtendedColorType;
     let mut bytes = Vec::new();
-    let encoded = JpegEncoder::new_with_quality(&mut bytes, quality.clamp(1, 100)).encode(
-        &img.data,
-        img.width as u32,
-        img.height as u32,
-        ExtendedColorType::L8,
-    );
-    let decoded = encoded
-        .ok()
-        .and_then(|_| ::image::load_from_memory(&bytes).ok())
-        .map(|d| d.into_luma8());
-    match decoded {
-        Some(d) if d.width() as usize == img.width && d.height() as usize == img.height => {
-            GrayImage {
-                width: img.width,
-                height: img.height,
-                data: d.into_raw(),
-            }
-        }
-        // An in-memory encoder of an in-memory image does not fail; keep the frame if it does.
-        _ => img.clone(),
+    let ty = if colour {
+        ExtendedColorType::Rgb8
+    } else {
+        ExtendedColorType::L8
+    };
+    JpegEncoder::new_with_quality(&mut bytes, quality.clamp(1, 100))
+        .encode(data, w as u32, h as u32, ty)
+        .ok()?;
+    let d = ::image::load_from_memory(&bytes).ok()?;
+    if d.width() as usize != w || d.height() as usize != h {
+        return None;
     }
+    Some(if colour {
+        d.into_rgb8().into_raw()
+    } else {
+        d.into_luma8().into_raw()
+    })
 }
 
 /// The three channels of a colour image as grey planes (R, G, B).
@@ -175,27 +186,13 @@ pub fn interleave(p: &[GrayImage; 3]) -> ColourImage {
 
 /// Encodes a colour image as a baseline JPEG of `quality` (1-100) and decodes it again.
 pub fn jpeg_colour(img: &ColourImage, quality: u8) -> ColourImage {
-    use ::image::codecs::jpeg::JpegEncoder;
-    use ::image::ExtendedColorType;
-    let mut bytes = Vec::new();
-    let encoded = JpegEncoder::new_with_quality(&mut bytes, quality.clamp(1, 100)).encode(
-        &img.data,
-        img.width as u32,
-        img.height as u32,
-        ExtendedColorType::Rgb8,
-    );
-    let decoded = encoded
-        .ok()
-        .and_then(|_| ::image::load_from_memory(&bytes).ok())
-        .map(|d| d.into_rgb8());
-    match decoded {
-        Some(d) if d.width() as usize == img.width && d.height() as usize == img.height => {
-            ColourImage {
-                width: img.width,
-                height: img.height,
-                data: d.into_raw(),
-            }
-        }
-        _ => img.clone(),
+    let (w, h) = (img.width, img.height);
+    match jpeg_round_trip(&img.data, w, h, quality, true) {
+        Some(data) => ColourImage {
+            width: w,
+            height: h,
+            data,
+        },
+        None => img.clone(),
     }
 }
