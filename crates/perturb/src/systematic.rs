@@ -95,22 +95,22 @@ pub fn depth_distortion(depth: &DepthImage, level: f64, units: f64, seed: u64) -
     let (w, h) = (depth.width, depth.height);
     let field = SmoothField::new(NoiseKey::new(seed, 0, Stream::Range), w, h);
     let k = level / 100.0 / 3.0;
-    let data = depth
-        .data
-        .iter()
-        .enumerate()
-        .map(|(i, &z)| {
-            if z <= 0.0 {
-                return z;
-            }
-            let z = z as f64;
-            quantise_png(z * (1.0 + k * z * field.at(i % w, i / w)), units)
-        })
-        .collect();
+    map_valid(depth, |i, z| {
+        quantise_png(z * (1.0 + k * z * field.at(i % w, i / w)), units)
+    })
+}
+
+/// `depth` with every valid pixel (index, metres) mapped by `f`; holes stay holes.
+fn map_valid(depth: &DepthImage, f: impl Fn(usize, f64) -> f32) -> DepthImage {
     DepthImage {
-        width: w,
-        height: h,
-        data,
+        width: depth.width,
+        height: depth.height,
+        data: depth
+            .data
+            .iter()
+            .enumerate()
+            .map(|(i, &z)| if z <= 0.0 { z } else { f(i, z as f64) })
+            .collect(),
     }
 }
 
@@ -219,24 +219,11 @@ pub fn disparity_quantization(
 ) -> DepthImage {
     let key = NoiseKey::new(seed, frame, Stream::Axial);
     let step = level * KINECT_DISPARITY_STEP;
-    let data = depth
-        .data
-        .iter()
-        .enumerate()
-        .map(|(i, &z)| {
-            if z <= 0.0 {
-                return z;
-            }
-            let d = KINECT_FB / z as f64 / step + 0.5 * key.normal(i as u64);
-            let k = d.round().max(1.0);
-            quantise_png(KINECT_FB / (k * step), units)
-        })
-        .collect();
-    DepthImage {
-        width: depth.width,
-        height: depth.height,
-        data,
-    }
+    map_valid(depth, |i, z| {
+        let d = KINECT_FB / z / step + 0.5 * key.normal(i as u64);
+        let k = d.round().max(1.0);
+        quantise_png(KINECT_FB / (k * step), units)
+    })
 }
 
 #[cfg(test)]
