@@ -2,21 +2,19 @@
 //! files, shows progress and prints reports; all the work lives in the library crates
 //! (`slam-core`, `ate-eval`, `datasets`, `synth`).
 
-mod ablation;
 mod analysis;
 mod commands;
 mod config_file;
 mod difficulty;
 mod external;
-mod figures;
+mod file_name;
 #[cfg(test)]
 mod fuzz_cli;
 mod regress;
-mod resilience;
+mod report;
 mod runner;
 mod select;
 mod sweep;
-mod tables;
 mod vocab_file;
 
 use clap::{Parser, Subcommand};
@@ -36,7 +34,7 @@ enum Command {
     /// Run SLAM on a sequence (default: the embedded synthetic sequence) and report its ATE.
     Run(commands::run::RunArgs),
     /// Sweep sequences x configurations x parameter grids x n seeds in parallel (resumable, shardable).
-    Sweep(commands::sweep::SweepArgs),
+    Sweep(Box<commands::sweep::SweepArgs>),
     /// Turn sweep records into the paper's tables (Markdown + CSV).
     Table(commands::table::TableArgs),
     /// The paper's analyses of MC-OR and AVC (Table II correlations, Fig. 7 / Fig. 8).
@@ -74,7 +72,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(a) => commands::run::run(a),
-        Command::Sweep(a) => commands::sweep::run(a),
+        Command::Sweep(a) => commands::sweep::run(*a),
         Command::Table(a) => commands::table::run(a),
         Command::Analyze(a) => commands::analyze::run(a),
         Command::Plot(a) => commands::plot::run(a),

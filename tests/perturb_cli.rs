@@ -581,3 +581,82 @@ fn a_perturbed_copy_of_a_colour_folder_stays_in_colour_and_level_zero_is_the_inp
     assert_ne!(first_rgb(&src), first_rgb(&noisy));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The ATE `noisefree run` gives on kinect's first 30 frames under `chain` with one
+/// perturbation seed and one SLAM seed.
+fn run_ate(dir: &Path, chain: &str, perturb_seed: u64, seed: u64) -> f64 {
+    let out = dir.join(format!("run-{perturb_seed}-{seed}"));
+    noisefree_ok(&[
+        "run",
+        "--seq",
+        "kinect",
+        "--frames",
+        "30",
+        "--perturb",
+        chain,
+        "--perturb-seed",
+        &perturb_seed.to_string(),
+        "--seed",
+        &seed.to_string(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    s["ate_rmse_m"].as_f64().unwrap()
+}
+
+/// Issue 55: run i of every system sees perturbation draw i (a paired design), different
+/// draws for different i; `--perturb-shared` gives every run one draw. Each run's draw is
+/// checked against `noisefree run` with that perturbation seed and SLAM seed.
+#[test]
+fn a_perturbation_sweep_pairs_its_draws_by_run_unless_shared() {
+    let dir = tmpdir("paired-draws");
+    std::fs::create_dir_all(&dir).unwrap();
+    let chain = "depth-axial:8";
+    for (name, shared) in [("paired", false), ("shared", true)] {
+        let out = dir.join(name);
+        let mut args = vec![
+            "sweep",
+            "--seq",
+            "kinect",
+            "--frames",
+            "30",
+            "--runs",
+            "2",
+            "--configs",
+            "orb,rc",
+            "--perturb",
+            "depth-axial:8",
+            "--perturb-seed",
+            "5",
+            "--quiet",
+            "--out",
+        ];
+        args.push(out.to_str().unwrap());
+        if shared {
+            args.push("--perturb-shared");
+        }
+        noisefree_ok(&args);
+        let recs = records(&out);
+        let at = |config: &str, seed: &str| {
+            recs.iter()
+                .find(|r| r["config"] == config && r["seed"] == seed && r["perturbation"] == chain)
+                .unwrap_or_else(|| panic!("{config} seed {seed}: {recs:?}"))
+        };
+        for seed in ["0", "1"] {
+            let draw = if shared || seed == "0" { "5" } else { "6" };
+            assert_eq!(at("orb", seed)["perturb_seed"], draw, "{name}, run {seed}");
+            assert_eq!(at("rc", seed)["perturb_seed"], draw, "{name}, run {seed}");
+        }
+        let ate: f64 = at("orb", "1")["ate_rmse"].parse().unwrap();
+        let draw = if shared { 5 } else { 6 };
+        assert_eq!(
+            ate,
+            run_ate(&dir, chain, draw, 1),
+            "{name}: run 1 on draw {draw}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -143,7 +143,7 @@ pub fn per_frame_panels(stem: &Path, title: &str, panels: &[Panel]) -> Result<()
             draw_panels(&area, title, panels)?;
             area.present().map_err(err)?;
         }
-        crate::figures::write_png(&tmp_png, size, pixels)?;
+        crate::report::figures::write_png(&tmp_png, size, pixels)?;
     }
     {
         let area = SVGBackend::new(&tmp_svg, size).into_drawing_area();
@@ -288,7 +288,7 @@ pub fn rejected_features_image(
         area.present().map_err(err)?;
     }
     let tmp = path.with_extension("tmp.png");
-    crate::figures::write_png(&tmp, (w, total_h), buf)?;
+    crate::report::figures::write_png(&tmp, (w, total_h), buf)?;
     std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }

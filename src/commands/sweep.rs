@@ -143,9 +143,18 @@ pub struct SweepArgs {
     /// Seed of the perturbations' random draws (every run of a point sees one perturbed copy).
     #[arg(long = "perturb-seed", default_value_t = 0, value_name = "S")]
     pub perturb_seed: u64,
-    /// Run k of a point draws its own perturbation (seed --perturb-seed + k), so the spread
-    /// over runs includes the perturbation's draws; features are then extracted per run.
-    #[arg(long = "perturb-per-run")]
+    /// Every run of a point sees one and the same perturbation draw (seed --perturb-seed).
+    /// Without it, run k of every point and every system draws perturbation k (seed
+    /// --perturb-seed + k): runs differ in their noise and systems are compared on the same
+    /// draws (a paired design). Features are extracted per draw where the images change.
+    #[arg(long = "perturb-shared")]
+    pub perturb_shared: bool,
+    /// The default since paired draws became it (kept so older scripts run unchanged).
+    #[arg(
+        long = "perturb-per-run",
+        hide = true,
+        conflicts_with = "perturb_shared"
+    )]
     pub perturb_per_run: bool,
     /// Stop after this many runs have finished in this invocation (for testing resumption).
     #[arg(long = "max-runs", value_name = "N", hide = true)]
@@ -302,7 +311,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let mut all_jobs = with_perturbations(
         expand(&labels, &kinds, &grids, args.runs),
         &points,
-        args.perturb_per_run,
+        !args.perturb_shared,
     );
     for job in &mut all_jobs {
         let synthetic = catalog
@@ -978,9 +987,9 @@ fn perturbed_folder(
     };
     let folder = cache.join("sequences").join(format!(
         "{}{realization}-{}f-{}-ps{seed}",
-        crate::external::export::safe(&src.label()),
+        crate::file_name::safe(&src.label()),
         frames.len(),
-        crate::external::export::safe(&chain.to_string())
+        crate::file_name::safe(&chain.to_string())
     ));
     if !folder.is_dir() {
         // A perturbed ground truth is written from memory, not copied from the source.
@@ -1008,17 +1017,4 @@ fn perturbed_folder(
         }
     }
     Ok(folder)
-}
-
-/// Whether a folder looks like a sweep output (has a runs*.csv).
-pub fn is_sweep_dir(dir: &Path) -> bool {
-    std::fs::read_dir(dir)
-        .map(|it| {
-            it.filter_map(|e| e.ok()).any(|e| {
-                let n = e.file_name();
-                let n = n.to_string_lossy();
-                n.starts_with("runs") && n.ends_with(".csv")
-            })
-        })
-        .unwrap_or(false)
 }

@@ -3,6 +3,7 @@
 //! TUM or EuRoC ASL), the run's frames as an associations file (TUM) or a times file (EuRoC),
 //! the camera settings file in the system's layout, and a vocabulary.
 
+use crate::file_name::safe;
 use crate::select::{LoadOptions, Source};
 use anyhow::{bail, Context, Result};
 use datasets::settings::{write_settings, CameraSettings, SettingsFormat};
@@ -50,30 +51,6 @@ impl OnDisk {
         Ok(())
     }
 }
-
-/// A file-name-safe version of `s` (cache keys, run folders).
-pub fn safe(s: &str) -> String {
-    let out: String = s
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    // A long chain (a named camera chain expands to a dozen members) keeps a readable head and
-    // a hash of the whole, so the name stays well under the file systems' 255 bytes.
-    if out.len() > SAFE_MAX {
-        let head: String = out.chars().take(SAFE_MAX - 17).collect();
-        return format!("{head}-{:016x}", slam_core::hash::fnv1a(s.as_bytes()));
-    }
-    out
-}
-
-/// The longest name [`safe`] returns.
-pub const SAFE_MAX: usize = 120;
 
 /// Creates the cache folder, with a `.gitignore` that keeps it out of a repository when it sits
 /// inside a committed results folder.

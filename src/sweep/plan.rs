@@ -221,7 +221,7 @@ impl Job {
         match &self.perturbation {
             None => self.sequence.clone(),
             Some(p) => {
-                let safe = crate::external::export::safe(&p.chain);
+                let safe = crate::file_name::safe(&p.chain);
                 format!("{}/{safe}-ps{}", self.sequence, p.seed)
             }
         }

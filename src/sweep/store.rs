@@ -632,6 +632,19 @@ pub fn load_dir(dir: &Path) -> Result<Vec<RunRecord>> {
     Ok(by_key.into_values().collect())
 }
 
+/// Whether a folder looks like a sweep output (has a runs*.csv).
+pub fn is_sweep_dir(dir: &Path) -> bool {
+    std::fs::read_dir(dir)
+        .map(|it| {
+            it.filter_map(|e| e.ok()).any(|e| {
+                let n = e.file_name();
+                let n = n.to_string_lossy();
+                n.starts_with("runs") && n.ends_with(".csv")
+            })
+        })
+        .unwrap_or(false)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

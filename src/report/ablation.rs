@@ -9,30 +9,12 @@
 //! Shares are ratios of mean differences, given without an interval: read them beside the
 //! rows' intervals (a share whose rows' intervals overlap says little).
 
-use crate::resilience::{Curve, LevelStats};
-use crate::tables::Rendered;
+use crate::report::markdown::Rendered;
+use crate::report::resilience::{Curve, LevelStats};
+use crate::report::stats::mean_ci95;
 use perturb::{NamedChain, Subject};
-use statrs::distribution::{ContinuousCDF, StudentsT};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-
-/// Mean, and the half-width of its 95 % interval (Student's t with n - 1 degrees of freedom,
-/// sample standard deviation), of `x`; the half-width is `None` for fewer than two values.
-pub fn mean_ci95(x: &[f64]) -> Option<(f64, Option<f64>)> {
-    let n = x.len();
-    if n == 0 {
-        return None;
-    }
-    let mean = x.iter().sum::<f64>() / n as f64;
-    if n < 2 {
-        return Some((mean, None));
-    }
-    let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-    let t = StudentsT::new(0.0, 1.0, (n - 1) as f64)
-        .expect("n - 1 >= 1 degrees of freedom")
-        .inverse_cdf(0.975);
-    Some((mean, Some(t * (var / n as f64).sqrt())))
-}
 
 /// A level as a table prints it: at most three decimals (the CSV keeps every digit).
 fn short(level: f64) -> String {
@@ -194,7 +176,7 @@ pub fn tables(
         }
         md.push_str(
             "\nATE RMSE in millimetres over the runs that did not fail; run i of every row sees \
-             perturbation draw i where the sweep ran with --perturb-per-run. The interval is the \
+             perturbation draw i (unless the sweep ran with --perturb-shared). The interval is the \
              mean's, Student's t at 95 % (sample standard deviation; the ± column is the \
              population one, as every table here). Share of the chain's effect: a member alone, \
              (its mean - unperturbed) / (chain - unperturbed); without a member, (chain - that \
@@ -204,23 +186,4 @@ pub fn tables(
         out.push((chain, Rendered { markdown: md, csv }));
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn t_interval_matches_reference_values() {
-        // R: t.test(c(1, 2, 3, 4, 5))$conf.int -> 1.036757 4.963243
-        let (m, h) = mean_ci95(&[1.0, 2.0, 3.0, 4.0, 5.0]).unwrap();
-        assert!((m - 3.0).abs() < 1e-12);
-        assert!((m - h.unwrap() - 1.036757).abs() < 1e-6, "{h:?}");
-        // qt(0.975, 9) = 2.262157; sd of 0..9 = 3.02765
-        let x: Vec<f64> = (0..10).map(f64::from).collect();
-        let (_, h) = mean_ci95(&x).unwrap();
-        assert!((h.unwrap() - 2.262157 * 3.02765 / 10f64.sqrt()).abs() < 1e-5);
-        assert_eq!(mean_ci95(&[2.0]), Some((2.0, None)));
-        assert_eq!(mean_ci95(&[]), None);
-    }
 }

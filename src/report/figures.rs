@@ -14,7 +14,7 @@ static FONT: Once = Once::new();
 
 fn register_font() {
     FONT.call_once(|| {
-        let bytes: &'static [u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+        let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
         // Registration fails only on a corrupt font file, which the build embeds; ignore.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
     });

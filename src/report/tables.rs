@@ -6,7 +6,7 @@
 //! why in its notes) and as a tidy CSV for notebooks: one row per group of runs (sequence,
 //! system, parameters) with numbers, not text (n, failed, mean, std, median, min, max, fps).
 
-use crate::resilience::system_label;
+use crate::report::markdown::{column_name, render, system_label, Rendered};
 use crate::sweep::plan::ConfigKind;
 use crate::sweep::store::{FolderSettings, RunRecord};
 use datasets::{Catalog, Class};
@@ -289,18 +289,25 @@ fn others(records: &[RunRecord], shown: &[&str], labels: &BTreeMap<String, Strin
     names.iter().map(|n| system_label(n, labels)).collect()
 }
 
-fn is_default(r: &RunRecord) -> bool {
-    let taus_ok = match (r.tau_mf, r.tau_gf, r.tau_mg) {
-        (None, None, None) => true,
-        (Some(a), Some(b), Some(c)) => (a, b, c) == DEFAULT_TAUS,
-        _ => false,
+/// Whether a run has the parameters Table III reports.
+pub(crate) fn is_default(r: &RunRecord) -> bool {
+    let taus = match (r.tau_mf, r.tau_gf, r.tau_mg) {
+        (None, None, None) => Some(None),
+        (Some(a), Some(b), Some(c)) => Some(Some((a, b, c))),
+        _ => None,
     };
-    taus_ok && r.baseline.is_none_or(|b| b == DEFAULT_BASELINE)
+    taus.is_some_and(|t| are_default_params(t, r.baseline))
+}
+
+/// Whether MC-OR's thresholds and AVC's b (absent: not a parameter of the system) are the ones
+/// Table III reports.
+pub(crate) fn are_default_params(taus: Option<(f64, f64, f64)>, b: Option<f64>) -> bool {
+    taus.is_none_or(|t| t == DEFAULT_TAUS) && b.is_none_or(|b| b == DEFAULT_BASELINE)
 }
 
 /// Sequences in table order: catalog order (easy before hard as the paper groups them), then
 /// any other label alphabetically.
-fn sequence_order(records: &[RunRecord], catalog: &Catalog) -> Vec<String> {
+pub(crate) fn sequence_order(records: &[RunRecord], catalog: &Catalog) -> Vec<String> {
     let mut present: Vec<String> = records.iter().map(|r| r.sequence.clone()).collect();
     present.sort();
     present.dedup();
@@ -316,38 +323,6 @@ fn sequence_order(records: &[RunRecord], catalog: &Catalog) -> Vec<String> {
         }
     }
     out
-}
-
-/// A rendered table: Markdown and CSV of the same content.
-#[derive(Clone, Debug, Default)]
-pub struct Rendered {
-    /// Markdown (with a heading and notes).
-    pub markdown: String,
-    /// CSV.
-    pub csv: String,
-}
-
-fn render(title: &str, notes: &str, header: &[String], rows: &[Vec<String>]) -> Rendered {
-    let mut md = format!("## {title}\n\n");
-    let _ = writeln!(md, "| {} |", header.join(" | "));
-    let _ = writeln!(
-        md,
-        "|{}|",
-        header.iter().map(|_| "---").collect::<Vec<_>>().join("|")
-    );
-    for r in rows {
-        let _ = writeln!(md, "| {} |", r.join(" | "));
-    }
-    if !notes.is_empty() {
-        let _ = write!(md, "\n{notes}\n");
-    }
-    let mut w = csv::Writer::from_writer(Vec::new());
-    let _ = w.write_record(header);
-    for r in rows {
-        let _ = w.write_record(r);
-    }
-    let csv = String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default();
-    Rendered { markdown: md, csv }
 }
 
 /// A published figure in millimetres (the paper gives metres to the millimetre).
@@ -651,20 +626,6 @@ fn external_notes(
         out.push(text + ".");
     }
     out.join(" ")
-}
-
-pub(crate) fn column_name(k: ConfigKind) -> &'static str {
-    match k {
-        ConfigKind::Orb => "ORB-SLAM2",
-        ConfigKind::Mcor => "w/ MC-OR",
-        ConfigKind::Avc => "w/ AVC",
-        ConfigKind::McorAvc => "w/ MC-OR+AVC",
-        ConfigKind::McorFrames => "w/ MC-OR (every frame)",
-        ConfigKind::McorFramesAvc => "w/ MC-OR (every frame)+AVC",
-        ConfigKind::McorKeyframes => "w/ MC-OR (keyframes)",
-        ConfigKind::McorKeyframesAvc => "w/ MC-OR (keyframes)+AVC",
-        ConfigKind::Rc => "noisefree: rigid consensus",
-    }
 }
 
 /// Table I: ATE (mm) versus the AVC baseline b, per sequence, with the baseline's ATE beside.

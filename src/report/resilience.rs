@@ -3,9 +3,9 @@
 //! **breaking level**: the first level, mildest first, whose mean ATE exceeds
 //! max(2 x its level-0 ATE, level-0 ATE + 1 cm), or where more than half of its runs fail.
 
+use crate::report::markdown::{system_label, Rendered};
 use crate::sweep::plan::ConfigKind;
 use crate::sweep::store::RunRecord;
-use crate::tables::{column_name, Rendered};
 use perturb::Family;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -33,12 +33,12 @@ pub struct LevelStats {
 impl LevelStats {
     /// Mean ATE of the runs that did not fail.
     pub fn mean(&self) -> Option<f64> {
-        crate::tables::mean_std(&self.ates).map(|(m, _)| m)
+        crate::report::tables::mean_std(&self.ates).map(|(m, _)| m)
     }
 
     /// Population standard deviation of those ATEs.
     pub fn std(&self) -> Option<f64> {
-        crate::tables::mean_std(&self.ates).map(|(_, s)| s)
+        crate::report::tables::mean_std(&self.ates).map(|(_, s)| s)
     }
 
     /// Median of those ATEs.
@@ -83,19 +83,6 @@ impl Curve {
             .iter()
             .find(|l| l.is_failure() || l.mean().is_some_and(|m| m > limit))
             .map(|l| l.level)
-    }
-}
-
-/// The heading of a system: ours by their column names (the baseline marked as ours), an
-/// external one by its definition's label.
-pub fn system_label(config: &str, labels: &BTreeMap<String, String>) -> String {
-    match ConfigKind::parse(config) {
-        Ok(ConfigKind::Orb) => "ORB-SLAM2 (ours)".into(),
-        Ok(k) => format!("{} (ours)", column_name(k)),
-        Err(_) => labels
-            .get(config)
-            .cloned()
-            .unwrap_or_else(|| config.to_string()),
     }
 }
 
@@ -250,7 +237,7 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
         for c in rows {
             // One number of decimals per row: three significant digits of its smallest mean,
             // so the levels of one system compare digit for digit (as Table III's rows).
-            let d = crate::tables::mm_decimals(
+            let d = crate::report::tables::mm_decimals(
                 c.levels
                     .iter()
                     .filter(|l| !l.is_failure())

@@ -1,0 +1,14 @@
+//! What a sweep's run records become: the paper's tables, the resilience and ablation tables,
+//! the statistics they state, the figures, and the folder index that links them.
+//!
+//! Layers, lowest first: `stats` and `markdown` (no report imports), then `figures`, then the
+//! tables (`tables`, `resilience`, `ablation`, `versus`), then `folder`, which writes them all.
+
+pub mod ablation;
+pub mod figures;
+pub mod folder;
+pub mod markdown;
+pub mod resilience;
+pub mod stats;
+pub mod tables;
+pub mod versus;
