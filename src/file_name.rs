@@ -31,13 +31,18 @@ mod tests {
 
     #[test]
     fn names_are_file_safe_and_long_ones_capped_apart() {
-        assert_eq!(safe("kinect-fr1:1.5+gt-offset:3"), "kinect-fr1_1.5_gt-offset_3");
+        assert_eq!(
+            safe("kinect-fr1:1.5+gt-offset:3"),
+            "kinect-fr1_1.5_gt-offset_3"
+        );
         let long_a = "depth-distortion:1.5+".repeat(10);
         let long_b = format!("{long_a}x");
         let (a, b) = (safe(&long_a), safe(&long_b));
         assert_eq!(a.len(), SAFE_MAX);
         assert_eq!(b.len(), SAFE_MAX);
         assert_ne!(a, b, "names that share a head differ by their hash");
-        assert!(a.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)));
+        assert!(a
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)));
     }
 }

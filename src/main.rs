@@ -37,6 +37,8 @@ enum Command {
     Sweep(Box<commands::sweep::SweepArgs>),
     /// Turn sweep records into the paper's tables (Markdown + CSV).
     Table(commands::table::TableArgs),
+    /// The findings: each claim of the paper against the committed tables, with intervals.
+    Report(commands::report::ReportArgs),
     /// The paper's analyses of MC-OR and AVC (Table II correlations, Fig. 7 / Fig. 8).
     Analyze(commands::analyze::AnalyzeArgs),
     /// ATE / RPE of an estimated trajectory against ground truth (like evo_ape / evaluate_ate.py).
@@ -74,6 +76,7 @@ fn main() -> ExitCode {
         Command::Run(a) => commands::run::run(a),
         Command::Sweep(a) => commands::sweep::run(*a),
         Command::Table(a) => commands::table::run(a),
+        Command::Report(a) => commands::report::run(a),
         Command::Analyze(a) => commands::analyze::run(a),
         Command::Plot(a) => commands::plot::run(a),
         Command::Eval(a) => commands::eval::run(a),

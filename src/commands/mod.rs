@@ -9,6 +9,7 @@ pub mod match_level;
 pub mod perturb;
 pub mod plot;
 pub mod regress;
+pub mod report;
 pub mod run;
 pub mod settings;
 pub mod sweep;

@@ -6,6 +6,7 @@
 
 pub mod ablation;
 pub mod figures;
+pub mod findings;
 pub mod folder;
 pub mod markdown;
 pub mod resilience;

@@ -131,6 +131,8 @@ impl Variant {
 struct Row {
     sequence: String,
     point: String,
+    /// The axis and level of the point (`None`: unperturbed or a fixed chain).
+    axis: Option<(String, Option<f64>)>,
     config: String,
     variant: Variant,
     runs: usize,
@@ -236,6 +238,10 @@ pub fn versus_baseline(
                 rows.push(Row {
                     sequence: seq.clone(),
                     point: point.clone(),
+                    axis: runs[0]
+                        .perturb_family
+                        .clone()
+                        .map(|f| (f, runs[0].perturb_level)),
                     config: v.config.clone(),
                     variant: v.clone(),
                     runs: runs.len(),
@@ -357,6 +363,8 @@ fn render_rows(
         csv_rows.push(vec![
             r.sequence.clone(),
             r.point.clone(),
+            r.axis.as_ref().map_or_else(String::new, |a| a.0.clone()),
+            num(r.axis.as_ref().and_then(|a| a.1)),
             r.config.clone(),
             num(r.variant.taus.map(|t| t.0)),
             num(r.variant.taus.map(|t| t.1)),
@@ -411,6 +419,8 @@ fn render_rows(
     let csv_header = [
         "sequence",
         "perturbation",
+        "axis",
+        "level",
         "config",
         "tau_mf",
         "tau_gf",
