@@ -3,8 +3,8 @@
 //! command line's switches (`--mcor`, `--avc`, `--mapping-lag`, `--seed`).
 
 use anyhow::{Context, Result};
-use slam_core::module::noise::AvcAim;
 use slam_core::system::{AvcParams, ClusterViews, Config, McorParams, RigidConsensusParams};
+use slam_core::techniques::params::AvcAim;
 use slam_core::SensorKind;
 use std::path::Path;
 

@@ -13,11 +13,11 @@
 //! A configuration with AVC may be written `NAME:direct` (e.g. `avc:direct`): the same run
 //! with `[avc] aim = "direct"`, the documented approximation that places the virtual camera
 //! without the angle's `atan2` / `sin` / `cos` (off by default; see
-//! [`AvcAim`](slam_core::module::noise::AvcAim)), so exact and approximate AVC are timed in one
+//! [`AvcAim`](slam_core::techniques::params::AvcAim)), so exact and approximate AVC are timed in one
 //! run. Likewise `NAME:strideK` (e.g. `mcor:stride2`) for a configuration with MC-OR: the run
 //! with `[mcor] view_stride = K`, the documented approximation whose map points keep the views
 //! of every K-th frame only (off by default; see
-//! [`McorParams::view_stride`](slam_core::module::noise::McorParams::view_stride)). Variants
+//! [`McorParams::view_stride`](slam_core::techniques::params::McorParams::view_stride)). Variants
 //! combine: `mcor+avc:direct:stride2`.
 
 use crate::commands::sweep::job_config;
@@ -29,8 +29,8 @@ use crate::sweep::plan::{ConfigKind, Job, Params, RunConfig};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::write_atomic;
 use serde::Serialize;
-use slam_core::module::noise::{AvcAim, ClusterViews};
 use slam_core::system::FrameStats;
+use slam_core::techniques::params::{AvcAim, ClusterViews};
 use std::path::PathBuf;
 use std::time::Instant;
 

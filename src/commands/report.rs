@@ -15,10 +15,12 @@ pub struct ReportArgs {
     /// [default: every folder under results/ that has one].
     pub dirs: Vec<PathBuf>,
     /// Write the findings into this Markdown file, between its `<!-- findings: begin ... -->`
-    /// and `<!-- findings: end -->` lines (links relative to its folder).
+    /// and `<!-- findings: end -->` lines, and their counts between its `<!-- glance: begin
+    /// ... -->` and `<!-- glance: end -->` lines (whichever it has; links relative to its
+    /// folder).
     #[arg(long, value_name = "FILE.md", conflicts_with = "check")]
     pub write: Option<PathBuf>,
-    /// Exit with an error when this file's findings block differs from the findings the
+    /// Exit with an error when this file's findings or glance block differs from the findings the
     /// tables give now (what CI runs on results/README.md).
     #[arg(long, value_name = "FILE.md")]
     pub check: Option<PathBuf>,
@@ -105,7 +107,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
                 dirs.len()
             );
         }
-        (None, None) => print!("{md}"),
+        (None, None) => print!("{}", md.full),
     }
     Ok(())
 }

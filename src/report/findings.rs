@@ -174,7 +174,12 @@ fn heading(config: &str) -> &'static str {
 
 /// Table III row by row: every twin comparison of a paper technique with the baseline at the
 /// paper's parameters, unperturbed or under a fixed chain, beside the paper's gain.
-fn table3_findings(md: &mut String, rows: &[VersusRow], catalog: &Catalog, base: &Path) {
+fn table3_findings(
+    md: &mut String,
+    rows: &[VersusRow],
+    catalog: &Catalog,
+    base: &Path,
+) -> (usize, usize, usize) {
     let mut lines: Vec<(String, String)> = Vec::new();
     let (mut n, mut repro, mut worse) = (0, 0, 0);
     for r in rows.iter().filter(|r| {
@@ -228,7 +233,7 @@ fn table3_findings(md: &mut String, rows: &[VersusRow], catalog: &Catalog, base:
          an interval that excludes 0 can still fall short of the correction.\n"
     );
     if lines.is_empty() {
-        return;
+        return (n, repro, worse);
     }
     lines.sort_by(|a, b| a.0.cmp(&b.0));
     md.push_str(
@@ -240,6 +245,7 @@ fn table3_findings(md: &mut String, rows: &[VersusRow], catalog: &Catalog, base:
         md.push('\n');
     }
     md.push('\n');
+    (n, repro, worse)
 }
 
 /// A point's name, shortened where a fixed chain expands to many members.
@@ -263,7 +269,7 @@ fn axis_findings(
     claim: &str,
     family: &str,
     uses: fn(&str) -> bool,
-) {
+) -> (usize, usize) {
     let mut by_folder: BTreeMap<PathBuf, Vec<&VersusRow>> = BTreeMap::new();
     for r in rows
         .iter()
@@ -274,12 +280,13 @@ fn axis_findings(
     let _ = writeln!(md, "### {title}\n\n{claim}\n");
     if by_folder.is_empty() {
         let _ = writeln!(md, "No committed table has a `{family}` axis.\n");
-        return;
+        return (0, 0);
     }
     md.push_str(
         "| Table | Comparisons | Gains surviving Holm | Losses surviving Holm | Largest gain [95 % CI] |\n\
          |---|---|---|---|---|\n",
     );
+    let mut totals = (0, 0);
     for (folder, list) in &by_folder {
         let gains = list.iter().filter(|r| verdict(r) == "reproduced").count();
         let losses = list
@@ -301,6 +308,7 @@ fn axis_findings(
                 )
             })
             .unwrap_or_default();
+        totals = (totals.0 + list.len(), totals.1 + gains);
         let _ = writeln!(
             md,
             "| {} | {} | {gains} | {losses} | {best} |",
@@ -309,6 +317,7 @@ fn axis_findings(
         );
     }
     md.push('\n');
+    totals
 }
 
 /// Table I: AVC against the baseline at each b.
@@ -589,7 +598,7 @@ fn uses_avc(c: &str) -> bool {
 
 /// The findings of the tables in `dirs`, links relative to `base` (the folder of the file they
 /// go into).
-pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<String> {
+pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Findings> {
     let mut rows = Vec::new();
     for d in dirs {
         rows.extend(read_versus(d)?);
@@ -605,8 +614,8 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Stri
          95 %, Student's t; paired where runs share seed and perturbation draw). Every number \
          below is read from the table it links.\n\n"
     );
-    table3_findings(&mut md, &rows, catalog, base);
-    axis_findings(
+    let (n3, repro, worse) = table3_findings(&mut md, &rows, catalog, base);
+    let lateral = axis_findings(
         &mut md,
         &rows,
         base,
@@ -616,7 +625,7 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Stri
         "depth-lateral",
         uses_mcor,
     );
-    axis_findings(
+    let axial = axis_findings(
         &mut md,
         &rows,
         base,
@@ -630,30 +639,91 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Stri
     table2_findings(&mut md, dirs, base)?;
     table4_findings(&mut md, dirs, base)?;
     variance_findings(&mut md, &rows, base);
-    Ok(md)
+    let glance = format!(
+        "**Results at a glance** (from {comparisons} comparisons with our baseline in {folders} \
+         committed tables, Holm-corrected at {ALPHA}; intervals, verdicts and links in \
+         [results/README.md]({}#findings)):\n\n\
+         - Table III on the twins: of {n3} comparisons of MC-OR, AVC and both with ORB-SLAM2, \
+         **{repro} reproduce the paper's gain**, {worse} find the technique worse, the rest \
+         detect no difference.\n\
+         - Under depth noise: MC-OR against lateral noise, {} of {} comparisons gain; AVC \
+         against axial noise, {} of {} comparisons gain.\n",
+        results_readme(base),
+        lateral.1,
+        lateral.0,
+        axial.1,
+        axial.0
+    );
+    Ok(Findings { full: md, glance })
+}
+
+/// Where results/README.md is from `base`.
+fn results_readme(base: &Path) -> String {
+    if base.join("results").is_dir() && !base.ends_with("results") {
+        "results/README.md".into()
+    } else {
+        "README.md".into()
+    }
+}
+
+/// The findings in full (results/README.md's block) and in a few lines (README.md's first
+/// screen).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Findings {
+    /// Every claim with its table of verdicts.
+    pub full: String,
+    /// The counts, for a project's first screen.
+    pub glance: String,
 }
 
 /// The first and last line of the findings block in a Markdown file.
 pub const BEGIN: &str = "<!-- findings: begin (generated by `noisefree report`; do not edit) -->";
 /// See [`BEGIN`].
 pub const END: &str = "<!-- findings: end -->";
+/// The first and last line of the glance block (a few lines of the findings).
+pub const GLANCE_BEGIN: &str =
+    "<!-- glance: begin (generated by `noisefree report`; do not edit) -->";
+/// See [`GLANCE_BEGIN`].
+pub const GLANCE_END: &str = "<!-- glance: end -->";
 
-/// `text` with the block between [`BEGIN`] and [`END`] replaced by `findings`; an error when
-/// the markers are missing.
-pub fn splice(text: &str, findings: &str) -> Result<String> {
-    let i = text
-        .find(BEGIN)
-        .context("no findings block (the line `<!-- findings: begin ... -->`)")?;
+/// `text` with the block between `begin` and `end` replaced by `body`; `None` when `begin` is
+/// not in `text`, an error when it is not closed.
+fn splice_block(text: &str, begin: &str, end: &str, body: &str) -> Result<Option<String>> {
+    let Some(i) = text.find(begin) else {
+        return Ok(None);
+    };
     let j = text[i..]
-        .find(END)
+        .find(end)
         .map(|j| i + j)
-        .context("the findings block is not closed (`<!-- findings: end -->`)")?;
-    Ok(format!(
-        "{}{BEGIN}\n{}{}",
+        .with_context(|| format!("a block is not closed (`{end}`)"))?;
+    Ok(Some(format!(
+        "{}{begin}\n{}\n{}",
         &text[..i],
-        findings.trim_end().to_string() + "\n",
+        body.trim_end(),
         &text[j..]
-    ))
+    )))
+}
+
+/// `text` with its findings block and its glance block (whichever it has) replaced; an error
+/// when it has neither.
+pub fn splice(text: &str, findings: &Findings) -> Result<String> {
+    let mut out = text.to_string();
+    let mut any = false;
+    if let Some(t) = splice_block(&out, BEGIN, END, &findings.full)? {
+        out = t;
+        any = true;
+    }
+    if let Some(t) = splice_block(&out, GLANCE_BEGIN, GLANCE_END, &findings.glance)? {
+        out = t;
+        any = true;
+    }
+    if !any {
+        anyhow::bail!(
+            "no findings block (the line `<!-- findings: begin ... -->`) and no glance block \
+             (`<!-- glance: begin ... -->`)"
+        );
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -683,13 +753,24 @@ mod tests {
 
     #[test]
     fn the_block_is_replaced_between_its_markers_only() {
+        let f = Findings {
+            full: "## Findings\n\nnew\n".into(),
+            glance: "**at a glance**\n".into(),
+        };
         let text = format!("# R\n\nintro\n{BEGIN}\nold\n{END}\n\n## rest\n");
-        let out = splice(&text, "## Findings\n\nnew\n").unwrap();
+        let out = splice(&text, &f).unwrap();
         assert_eq!(
             out,
             format!("# R\n\nintro\n{BEGIN}\n## Findings\n\nnew\n{END}\n\n## rest\n")
         );
-        assert!(splice("no block", "x").is_err());
-        assert!(splice(&format!("{BEGIN}\nnever closed"), "x").is_err());
+        let both = format!("{GLANCE_BEGIN}\nold\n{GLANCE_END}\nmid\n{BEGIN}\n{END}\n");
+        assert_eq!(
+            splice(&both, &f).unwrap(),
+            format!(
+                "{GLANCE_BEGIN}\n**at a glance**\n{GLANCE_END}\nmid\n{BEGIN}\n## Findings\n\nnew\n{END}\n"
+            )
+        );
+        assert!(splice("no block", &f).is_err());
+        assert!(splice(&format!("{BEGIN}\nnever closed"), &f).is_err());
     }
 }

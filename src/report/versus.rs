@@ -35,11 +35,21 @@ fn ates(runs: &[&RunRecord]) -> BTreeMap<PairKey, f64> {
 }
 
 /// A system against the baseline on the runs they share (paired) when at least two pairs
-/// exist and every run of each has its partner; Welch's test otherwise.
+/// exist and every run of each has its partner; Welch's test otherwise; `None` when each
+/// system's runs are all identical (one result each, whatever the seeds: no spread to test
+/// against).
 pub fn compare(
     baseline: &BTreeMap<PairKey, f64>,
     other: &BTreeMap<PairKey, f64>,
 ) -> Option<Comparison> {
+    // Two groups of identical runs are one result each: no spread, nothing to test.
+    let constant = |m: &BTreeMap<PairKey, f64>| {
+        let mut v = m.values();
+        v.next().is_none_or(|first| v.all(|x| x == first))
+    };
+    if constant(baseline) && constant(other) {
+        return None;
+    }
     let shared: Vec<&PairKey> = baseline.keys().filter(|k| other.contains_key(k)).collect();
     if shared.len() >= 2 && shared.len() == baseline.len() && shared.len() == other.len() {
         let b: Vec<f64> = shared.iter().map(|k| baseline[k]).collect();
@@ -137,6 +147,8 @@ struct Row {
     variant: Variant,
     runs: usize,
     failed: usize,
+    /// Both this system's runs and the baseline's are each all identical (nothing to test).
+    identical: bool,
     summary: Option<Summary>,
     comparison: Option<Comparison>,
     /// The paper's ATE for this system's column on the imitated row (metres), and its
@@ -246,6 +258,10 @@ pub fn versus_baseline(
                     variant: v.clone(),
                     runs: runs.len(),
                     failed: runs.iter().filter(|r| r.failed).count(),
+                    identical: *v != baseline
+                        && these.len() > 1
+                        && base.len() > 1
+                        && compare(&base, &these).is_none(),
                     summary: summarize(&values),
                     comparison: (*v != baseline).then(|| compare(&base, &these)).flatten(),
                     paper: if paper && v.is_default() {
@@ -315,6 +331,8 @@ fn render_rows(
             || {
                 if r.config == "orb" {
                     "(baseline)".into()
+                } else if r.identical {
+                    "runs identical: no test".into()
                 } else {
                     "-".into()
                 }
@@ -402,7 +420,8 @@ fn render_rows(
          p-value, by the paired t-test where both systems ran on the same seeds and perturbation \
          draws (every run with its partner), Welch's t-test otherwise. {comparisons} comparisons \
          in this table, Holm-corrected together; a difference in **bold** survives the \
-         correction at {ALPHA}.{}",
+         correction at {ALPHA}. Where both systems' runs are each all identical (one result each), \
+         nothing is tested.{}",
         if paper {
             " `paper`: the paper's figure for the system's column on the sequence a twin \
              imitates, and its difference from the paper's ORB-SLAM2 figure in %."
@@ -580,5 +599,24 @@ mod tests {
         assert!(t.csv.contains("Welch_t"));
         let only: Vec<RunRecord> = recs.into_iter().filter(|r| r.config == "orb").collect();
         assert!(versus_baseline(&only, &Catalog::embedded(), false, &BTreeMap::new()).is_none());
+    }
+
+    /// Three bit-identical runs per system are one result each: no p-value, however far
+    /// apart the two results are (issue 55's 144 stereo cells).
+    #[test]
+    fn identical_runs_are_not_tested() {
+        let mut recs: Vec<RunRecord> = (0..3).map(|i| record("s", "orb", i, 0.004, None)).collect();
+        recs.extend((0..3).map(|i| record("s", "avc", i, 0.005, None)));
+        let t = versus_baseline(&recs, &Catalog::embedded(), false, &BTreeMap::new()).unwrap();
+        assert!(
+            t.markdown.contains("runs identical: no test"),
+            "{}",
+            t.markdown
+        );
+        assert!(t.markdown.contains("0 comparisons"), "{}", t.markdown);
+        // One varying run makes it a comparison again.
+        recs[5].ate_rmse = Some(0.0051);
+        let t = versus_baseline(&recs, &Catalog::embedded(), false, &BTreeMap::new()).unwrap();
+        assert!(t.markdown.contains("1 comparisons"), "{}", t.markdown);
     }
 }

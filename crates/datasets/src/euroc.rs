@@ -154,24 +154,6 @@ fn yaml_list(path: &Path, text: &str, key: &str, n: usize) -> Result<Vec<f64>, D
     Ok(vals)
 }
 
-/// The rotation nearest to `m` (nalgebra's `from_matrix`, whose result it gives bit for bit),
-/// or `None` when `m` is far from any rotation (`|m^T m - I| > 0.5`, or not finite). The check
-/// comes first because `from_matrix` never returns for some such matrices: with an entry of
-/// 7e61 (a fuzzed `sensor.yaml`) its search cannot see a rotation's entries beside it and
-/// loops forever.
-pub(crate) fn near_rotation(m: &Matrix3<f64>) -> Option<Rotation3<f64>> {
-    let err = (m.transpose() * m - Matrix3::identity()).abs().max();
-    if err.is_nan() || err > 0.5 {
-        return None;
-    }
-    Some(Rotation3::from_matrix_eps(
-        m,
-        f64::EPSILON,
-        1000,
-        Rotation3::identity(),
-    ))
-}
-
 /// Parses an EuRoC camera `sensor.yaml`: `T_BS` (4x4 row-major), `resolution`, `intrinsics`
 /// (fu, fv, cu, cv), `distortion_coefficients` (k1, k2, p1, p2) of a `radial-tangential` model,
 /// `rate_hz`.
@@ -213,7 +195,7 @@ pub fn read_sensor_yaml(path: &Path) -> Result<RawCamera, DatasetError> {
     };
     let m = Matrix3::new(t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]);
     // The published rotations are orthonormal to ~1e-9; re-orthonormalise via the quaternion.
-    let rot = near_rotation(&m).unwrap_or_else(Rotation3::identity);
+    let rot = crate::rectify::near_rotation(&m).unwrap_or_else(Rotation3::identity);
     let off = (rot.matrix() - m).norm();
     if off.is_nan() || off > 1e-3 {
         let line = yaml_value(&text, "data").map_or(0, |v| v.1);

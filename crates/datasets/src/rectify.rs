@@ -9,7 +9,7 @@
 //! images and `u_left - u_right = fx * baseline / Z`.
 
 use crate::DatasetError;
-use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector2, Vector3};
 use slam_core::camera::distort_normalized;
 use slam_core::{Camera, Distortion, GrayImage, SensorKind};
 
@@ -438,6 +438,24 @@ fn inner_rectangle(cam: &RawCamera, rot: &Rotation3<f64>, f: f64, c: &Vector2<f6
         }
     }
     [x0, y0, x1, y1]
+}
+
+/// The rotation nearest to `m` (nalgebra's `from_matrix`, whose result it gives bit for bit),
+/// or `None` when `m` is far from any rotation (`|m^T m - I| > 0.5`, or not finite). The check
+/// comes first because `from_matrix` never returns for some such matrices: with an entry of
+/// 7e61 (a fuzzed `sensor.yaml`) its search cannot see a rotation's entries beside it and
+/// loops forever.
+pub(crate) fn near_rotation(m: &Matrix3<f64>) -> Option<Rotation3<f64>> {
+    let err = (m.transpose() * m - Matrix3::identity()).abs().max();
+    if err.is_nan() || err > 0.5 {
+        return None;
+    }
+    Some(Rotation3::from_matrix_eps(
+        m,
+        f64::EPSILON,
+        1000,
+        Rotation3::identity(),
+    ))
 }
 
 #[cfg(test)]

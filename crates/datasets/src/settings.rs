@@ -1060,7 +1060,7 @@ fn read_orbslam3(e: &Entries, sensor: SensorKind) -> Result<CameraSettings, Data
             let t = e.matrix("Stereo.T_c1_c2", 4, 4)?;
             let m = Matrix4::from_row_slice(&t);
             let r3 = m.fixed_view::<3, 3>(0, 0).into_owned();
-            let rot = crate::euroc::near_rotation(&r3).ok_or_else(|| {
+            let rot = crate::rectify::near_rotation(&r3).ok_or_else(|| {
                 DatasetError::invalid(
                     e.path,
                     "`Stereo.T_c1_c2`: its rotation block is not a rotation",

@@ -22,6 +22,7 @@ pub mod feature;
 pub mod frame;
 pub mod geometry;
 pub mod hash;
+pub mod ids;
 pub mod image;
 pub mod matching;
 pub mod module;

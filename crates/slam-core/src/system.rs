@@ -34,7 +34,7 @@ use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
 use crate::optimize::{BaConfig, PoseOptConfig};
 use crate::place::{PlaceRecognition, Vocabulary};
 
-pub use crate::module::noise::{AvcParams, ClusterViews, McorParams};
+pub use crate::techniques::params::{AvcParams, ClusterViews, McorParams};
 use crate::techniques::FrameView;
 pub use crate::techniques::RigidConsensusParams;
 

@@ -10,8 +10,8 @@
 mod common;
 
 use common::{ate_rmse, render, track, tracked};
-use slam_core::module::noise::{ClusterViews, McorParams};
 use slam_core::system::{Config, System};
+use slam_core::techniques::params::{ClusterViews, McorParams};
 use synth::Preset;
 
 #[test]

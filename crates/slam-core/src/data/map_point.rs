@@ -50,7 +50,7 @@ pub struct MapPoint {
     /// Local-mapping marker: id + 1 of the keyframe whose local BA last included this point.
     pub ba_local_for_kf: u32,
     /// MC-OR's frame views of the point (only stored under
-    /// [`crate::module::noise::ClusterViews::EveryFrame`]; empty otherwise).
+    /// [`crate::techniques::params::ClusterViews::EveryFrame`]; empty otherwise).
     pub views: FrameViews,
 }
 

@@ -5,16 +5,15 @@
 
 mod features;
 mod graph;
-mod ids;
 mod keyframe;
 mod levels;
 mod map;
 mod map_point;
 mod tracked_frame;
 
+pub use crate::ids::{KeyFrameId, MapPointId};
 pub use features::{undistorted_bounds, FeatureGrid, Features, GRID_COLS, GRID_ROWS};
 pub use graph::COVISIBILITY_MIN_WEIGHT;
-pub use ids::{KeyFrameId, MapPointId};
 pub use keyframe::KeyFrame;
 pub use levels::ScaleLevels;
 pub use map::Map;

@@ -15,15 +15,15 @@
 //! feature. Before this cache every gate rebuilt every cluster: 54 % of an MC-OR run's
 //! instructions on the 300-frame kinect sequence.
 //!
-//! Beside the clusters, the cache keeps the verdicts of the frame being gated ([`GateMemo`]),
+//! Beside the clusters, the cache keeps the verdicts of the frame being gated ([`GateMemo`](crate::techniques::mcor_prepared::GateMemo)),
 //! so that its gates compute a verdict again only when the pose moved far enough to change it.
 
-use nalgebra::{Isometry3, Matrix3, Vector3};
+use nalgebra::Isometry3;
 
 use crate::data::{KeyFrameId, Map, MapPointId};
-use crate::module::noise::{ClusterViews, McorParams};
-use crate::techniques::mcor::{ClusterFeature, McorVerdict};
-use crate::techniques::mcor_prepared::PreparedCluster;
+use crate::techniques::mcor::ClusterFeature;
+use crate::techniques::mcor_prepared::{GateMemo, PreparedCluster};
+use crate::techniques::params::{ClusterViews, McorParams};
 use crate::techniques::{FrameView, FrameViews};
 use crate::Camera;
 
@@ -174,17 +174,11 @@ impl ClusterCache {
     ) -> GateMemo {
         let key = (frame_id, self.generation, self.views);
         let mut memo = std::mem::take(&mut self.memo);
-        if memo.key == Some(key) && memo.params.as_ref() == Some(params) {
+        if memo.is_for(key, params) {
             return memo;
         }
         // A new frame (or map, or thresholds): forget the verdicts, keep the buffers.
-        memo.key = Some(key);
-        memo.params = Some(params.clone());
-        memo.poses.clear();
-        memo.moved.clear();
-        memo.kept.clear();
-        memo.kept.resize(n_keypoints, None);
-        memo.check = self.check;
+        memo.start(key, params, n_keypoints, self.check);
         memo
     }
 
@@ -195,7 +189,7 @@ impl ClusterCache {
 
     /// Kept verdicts checked against computed ones since [`set_check`](Self::set_check).
     pub fn checked_verdicts(&self) -> u64 {
-        self.memo.checked
+        self.memo.checked()
     }
 
     /// Map point `id`'s cluster, prepared for the map as it stands.
@@ -252,89 +246,5 @@ impl ClusterCache {
             twc_good: map.keyframe(kf).map(|k| k.tcw.inverse()),
             twc_any: map.keyframe_pose_any(kf).map(|t| t.inverse()),
         }
-    }
-}
-
-/// MC-OR's verdicts for the matches of one frame, kept across the rounds of its pose
-/// optimizations and its gates (motion model, local map, the statistics at the final pose):
-/// a verdict is computed again only when the pose moved the match's current feature by as
-/// much as the verdict's reach
-/// ([`PreparedCluster::verdict_with_reach`](crate::techniques::mcor_prepared::PreparedCluster::verdict_with_reach)),
-/// so every gate has the verdicts a full gate would give. Poses move features by millimetres
-/// between rounds and the thresholds are decimetres: most verdicts of a frame are computed once.
-#[derive(Clone, Debug, Default)]
-pub struct GateMemo {
-    /// The frame, the clusters' generation and reading the verdicts belong to.
-    key: Option<(u64, u64, Option<ClusterViews>)>,
-    /// The thresholds they were judged with.
-    params: Option<McorParams>,
-    /// The camera-to-world poses verdicts were computed at: rotation, translation.
-    poses: Vec<(Matrix3<f64>, Vector3<f64>)>,
-    /// For the current gate (the last pose), per earlier pose: the bounds of [`moves`](Self::moves).
-    moved: Vec<(f64, f64)>,
-    /// Per keypoint: the map point it was judged with, the verdict, its reach (metres) and the
-    /// index of its pose in `poses`.
-    kept: Vec<Option<(MapPointId, McorVerdict, f64, usize)>>,
-    /// Checking: every kept verdict handed out is compared with one computed (the cache's
-    /// [`set_check`](ClusterCache::set_check)).
-    check: bool,
-    /// Kept verdicts checked so far.
-    checked: u64,
-}
-
-impl GateMemo {
-    /// Starts a gate at pose `twc`: per earlier pose, the bounds (a, b) of how far the change
-    /// moves a camera-frame point p in the world, |dR p + dt| <= a |p| + b (a: the Frobenius
-    /// norm of the rotation's change, which bounds its operator norm); the pose is recorded
-    /// for the verdicts computed at it.
-    pub fn moves(&mut self, twc: &Isometry3<f64>) {
-        let r = *twc.rotation.to_rotation_matrix().matrix();
-        let t = twc.translation.vector;
-        self.moved.clear();
-        self.moved.extend(
-            self.poses
-                .iter()
-                .map(|(r0, t0)| ((r - r0).norm(), (t - t0).norm())),
-        );
-        self.poses.push((r, t));
-    }
-
-    /// The verdict of `match_` (keypoint index, map point) at the pose last given to
-    /// [`moves`](Self::moves); `p_norm` is the norm of its current
-    /// feature (camera frame, 0 without one). The kept verdict while the pose moved the feature
-    /// by less than its reach, else `compute()` (verdict and reach), kept.
-    #[inline]
-    pub fn verdict(
-        &mut self,
-        match_: (usize, MapPointId),
-        p_norm: f64,
-        compute: impl FnOnce() -> (McorVerdict, f64),
-    ) -> McorVerdict {
-        let (i, id) = match_;
-        if let Some(Some((kept_id, verdict, reach, at))) = self.kept.get(i) {
-            // `moved` has an entry for every pose before the gate's own.
-            if *kept_id == id {
-                if let Some((a, b)) = self.moved.get(*at) {
-                    if a * p_norm + b < *reach {
-                        let kept = *verdict;
-                        if self.check {
-                            let (computed, _) = compute();
-                            assert_eq!(
-                                kept, computed,
-                                "the kept verdict of {id} is not the gate's"
-                            );
-                            self.checked += 1;
-                        }
-                        return kept;
-                    }
-                }
-            }
-        }
-        let (verdict, reach) = compute();
-        // Kept at the gate's pose (none before the first `moves`: then not kept).
-        if let (Some(slot), Some(at)) = (self.kept.get_mut(i), self.poses.len().checked_sub(1)) {
-            *slot = Some((id, verdict, reach, at));
-        }
-        verdict
     }
 }

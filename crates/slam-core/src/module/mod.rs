@@ -13,7 +13,6 @@ pub mod keyframe_insertion;
 pub mod local_mapping;
 pub mod loop_closing;
 pub mod mcor_clusters;
-pub mod noise;
 pub mod pose_estimation;
 pub mod relocalization;
 pub mod tracking;

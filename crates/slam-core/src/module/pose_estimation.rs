@@ -23,13 +23,14 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use super::mcor_clusters::{ClusterCache, GateMemo};
-use super::noise::{AvcParams, ClusterViews, McorParams};
+use super::mcor_clusters::ClusterCache;
 use crate::camera::Camera;
 use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
 use crate::optimize::{pose_optimization_with, Measurement, PoseObservation, PoseOptConfig};
 use crate::techniques::mcor_prepared::gate_point;
+use crate::techniques::mcor_prepared::GateMemo;
+use crate::techniques::params::{AvcParams, ClusterViews, McorParams};
 use crate::techniques::rigid_consensus::{
     nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
 };

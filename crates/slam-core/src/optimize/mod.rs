@@ -8,6 +8,7 @@
 //! coordinates ([`Measurement`]), so a new residual such as the paper's 4-D AVC term plugs in
 //! through [`CameraResidual`] without touching the solvers.
 
+mod camera_residual;
 mod dense_cholesky;
 mod envelope;
 mod fixed_mul;
@@ -23,7 +24,9 @@ mod residual;
 mod robust;
 #[cfg(test)]
 pub(crate) mod test_scene;
+pub mod virtual_camera;
 
+pub use camera_residual::{chi2_95, CameraResidual, ResidualBlock, MAX_RESIDUAL_DOF, MIN_DEPTH};
 pub use local_ba::{
     local_bundle_adjustment, BaConfig, BaKeyFrame, BaObservation, BaPoint, BaProblem, BaReport,
 };
@@ -32,7 +35,6 @@ pub use pose_only::{
     pose_optimization, pose_optimization_with, BetweenRounds, PoseObservation, PoseOptConfig,
     PoseOptResult,
 };
-pub use residual::{
-    chi2_95, CameraResidual, Measurement, ResidualBlock, MAX_RESIDUAL_DOF, MIN_DEPTH,
-};
+pub use residual::Measurement;
 pub use robust::Huber;
+pub use virtual_camera::AvcAim;

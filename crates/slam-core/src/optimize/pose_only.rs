@@ -292,8 +292,8 @@ pub(crate) fn residual_pose_jacobian(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::optimize::camera_residual::{CameraResidual, ResidualBlock};
     use crate::optimize::numdiff::assert_jacobian;
-    use crate::optimize::residual::{CameraResidual, ResidualBlock};
     use crate::optimize::test_scene::{
         self, gaussian, gross_outlier, observe, perturb, pose_error,
     };

@@ -50,7 +50,7 @@ use std::collections::VecDeque;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use crate::module::noise::McorParams;
+use crate::techniques::params::McorParams;
 
 /// Most recent features a cluster keeps individually; older ones only count in G's running sum.
 pub const MCOR_CLUSTER_CAPACITY: usize = 32;

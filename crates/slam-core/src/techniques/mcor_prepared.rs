@@ -19,10 +19,11 @@
 //! the sums are replayed from the features in the order a `McorCluster` built by
 //! `push_distinct` / `add_folded` would have made them.
 
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
 use super::mcor::{ClusterFeature, McorVerdict, MCOR_CLUSTER_CAPACITY};
-use crate::module::noise::McorParams;
+use crate::ids::MapPointId;
+use crate::techniques::params::{ClusterViews, McorParams};
 
 /// Relative margin of the CL2 bound: a bound within this fraction of tau_GF is not trusted and
 /// the exact mean is computed (rounding of a sum of at most a few dozen norms is ~1e-14).
@@ -434,6 +435,120 @@ fn exact_metrics(
     (sum_m / n, sum_g / n, cl3)
 }
 
+/// MC-OR's verdicts for the matches of one frame, kept across the rounds of its pose
+/// optimizations and its gates (motion model, local map, the statistics at the final pose):
+/// a verdict is computed again only when the pose moved the match's current feature by as
+/// much as the verdict's reach
+/// ([`PreparedCluster::verdict_with_reach`]),
+/// so every gate has the verdicts a full gate would give. Poses move features by millimetres
+/// between rounds and the thresholds are decimetres: most verdicts of a frame are computed once.
+#[derive(Clone, Debug, Default)]
+pub struct GateMemo {
+    /// The frame, the clusters' generation and reading the verdicts belong to.
+    key: Option<(u64, u64, Option<ClusterViews>)>,
+    /// The thresholds they were judged with.
+    params: Option<McorParams>,
+    /// The camera-to-world poses verdicts were computed at: rotation, translation.
+    poses: Vec<(Matrix3<f64>, Vector3<f64>)>,
+    /// For the current gate (the last pose), per earlier pose: the bounds of [`moves`](Self::moves).
+    moved: Vec<(f64, f64)>,
+    /// Per keypoint: the map point it was judged with, the verdict, its reach (metres) and the
+    /// index of its pose in `poses`.
+    kept: Vec<Option<(MapPointId, McorVerdict, f64, usize)>>,
+    /// Checking: every kept verdict handed out is compared with one computed (the cluster
+    /// cache's `set_check`).
+    check: bool,
+    /// Kept verdicts checked so far.
+    checked: u64,
+}
+
+impl GateMemo {
+    /// Whether the memo holds the verdicts of `key` (frame, clusters' generation, reading)
+    /// under `params`.
+    pub fn is_for(&self, key: (u64, u64, Option<ClusterViews>), params: &McorParams) -> bool {
+        self.key == Some(key) && self.params.as_ref() == Some(params)
+    }
+
+    /// Forgets every verdict (keeping the buffers) and starts the memo of `key` under `params`
+    /// for a frame of `n_keypoints` keypoints; `check` compares every kept verdict handed out
+    /// with one computed.
+    pub fn start(
+        &mut self,
+        key: (u64, u64, Option<ClusterViews>),
+        params: &McorParams,
+        n_keypoints: usize,
+        check: bool,
+    ) {
+        self.key = Some(key);
+        self.params = Some(params.clone());
+        self.poses.clear();
+        self.moved.clear();
+        self.kept.clear();
+        self.kept.resize(n_keypoints, None);
+        self.check = check;
+    }
+
+    /// Kept verdicts checked against computed ones so far.
+    pub fn checked(&self) -> u64 {
+        self.checked
+    }
+
+    /// Starts a gate at pose `twc`: per earlier pose, the bounds (a, b) of how far the change
+    /// moves a camera-frame point p in the world, |dR p + dt| <= a |p| + b (a: the Frobenius
+    /// norm of the rotation's change, which bounds its operator norm); the pose is recorded
+    /// for the verdicts computed at it.
+    pub fn moves(&mut self, twc: &Isometry3<f64>) {
+        let r = *twc.rotation.to_rotation_matrix().matrix();
+        let t = twc.translation.vector;
+        self.moved.clear();
+        self.moved.extend(
+            self.poses
+                .iter()
+                .map(|(r0, t0)| ((r - r0).norm(), (t - t0).norm())),
+        );
+        self.poses.push((r, t));
+    }
+
+    /// The verdict of `match_` (keypoint index, map point) at the pose last given to
+    /// [`moves`](Self::moves); `p_norm` is the norm of its current
+    /// feature (camera frame, 0 without one). The kept verdict while the pose moved the feature
+    /// by less than its reach, else `compute()` (verdict and reach), kept.
+    #[inline]
+    pub fn verdict(
+        &mut self,
+        match_: (usize, MapPointId),
+        p_norm: f64,
+        compute: impl FnOnce() -> (McorVerdict, f64),
+    ) -> McorVerdict {
+        let (i, id) = match_;
+        if let Some(Some((kept_id, verdict, reach, at))) = self.kept.get(i) {
+            // `moved` has an entry for every pose before the gate's own.
+            if *kept_id == id {
+                if let Some((a, b)) = self.moved.get(*at) {
+                    if a * p_norm + b < *reach {
+                        let kept = *verdict;
+                        if self.check {
+                            let (computed, _) = compute();
+                            assert_eq!(
+                                kept, computed,
+                                "the kept verdict of {id} is not the gate's"
+                            );
+                            self.checked += 1;
+                        }
+                        return kept;
+                    }
+                }
+            }
+        }
+        let (verdict, reach) = compute();
+        // Kept at the gate's pose (none before the first `moves`: then not kept).
+        if let (Some(slot), Some(at)) = (self.kept.get_mut(i), self.poses.len().checked_sub(1)) {
+            *slot = Some((id, verdict, reach, at));
+        }
+        verdict
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -748,12 +863,12 @@ mod tests {
 
     #[test]
     fn the_gate_memo_gives_every_pose_the_verdicts_of_a_full_gate() {
-        use crate::data::MapPointId;
-        use crate::module::mcor_clusters::ClusterCache;
+        use crate::ids::MapPointId;
         let trials = near_threshold_trials(33, 300);
         let mut g = rng(3);
         let params = McorParams::default();
-        let mut memo = ClusterCache::new().take_memo(7, trials.len(), &params);
+        let mut memo = GateMemo::default();
+        memo.start((7, 0, None), &params, trials.len(), false);
         let mut twc = trials[0].2;
         let mut computed = 0;
         let poses = 12;

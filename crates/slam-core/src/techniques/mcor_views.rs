@@ -1,7 +1,7 @@
 //! The every-frame reading of MC-OR's cluster (paper III-A: a landmark "tracked across N camera
 //! views", its centroid G "updated after every camera viewpoint").
 //!
-//! With [`crate::module::noise::ClusterViews::EveryFrame`], every tracked frame that keeps a
+//! With [`crate::techniques::params::ClusterViews::EveryFrame`], every tracked frame that keeps a
 //! match of a map point as an inlier (and is not made a keyframe: a keyframe's observation is in
 //! the cluster already) stores its 3-D feature on the point. A view is kept relative to the
 //! frame's reference keyframe, so when bundle adjustment or a loop correction moves that

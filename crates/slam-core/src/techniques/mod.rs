@@ -7,20 +7,22 @@
 //!   runs; exact);
 //! - [`mcor_views`]: the every-frame reading of MC-OR's cluster (frame views stored on map
 //!   points);
-//! - [`avc`]: the Adaptive Virtual Camera residual (III-B, Eq. 8-12), a 4-D
-//!   [`crate::optimize::CameraResidual`] for pose-only optimization and bundle adjustment;
+//! - [`avc`]: the Adaptive Virtual Camera (III-B, Eq. 8-12): its 4-D residual, a
+//!   [`crate::optimize::CameraResidual`] for pose-only optimization and bundle adjustment (in
+//!   [`crate::optimize::virtual_camera`]), and the measurement a keypoint with depth gets;
 //! - [`rigid_consensus`](mod@rigid_consensus): noisefree's own gate beyond the paper, the largest set of matches
 //!   one rigid camera motion explains (RANSAC over 3-D-3-D matches);
 //! - [`correlation`]: the error terms and Pearson correlations of Table II.
 //!
 //! The system switches them on through `Config::mcor` / `Config::avc`
-//! ([`crate::module::noise`]); the hook points are in [`crate::module::pose_estimation`].
+//! ([`params`]); the hook points are in [`crate::module::pose_estimation`].
 
 pub mod avc;
 pub mod correlation;
 pub mod mcor;
 pub mod mcor_prepared;
 pub mod mcor_views;
+pub mod params;
 pub mod rigid_consensus;
 #[cfg(test)]
 mod test_support;
@@ -33,4 +35,5 @@ pub use mcor::{
     MCOR_CLUSTER_CAPACITY,
 };
 pub use mcor_views::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
+pub use params::{AvcAim, AvcParams, ClusterViews, McorParams};
 pub use rigid_consensus::{rigid_consensus, Consensus, ConsensusMatch, RigidConsensusParams};

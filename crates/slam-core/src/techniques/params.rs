@@ -1,10 +1,13 @@
 //! Parameters of the paper's two noise-resilience techniques. They are switched on by
-//! `Config::mcor` / `Config::avc`; the algorithms live in [`crate::techniques`] and plug into the
-//! hook points of [`crate::module::pose_estimation`] (MC-OR gates observations before every
+//! `Config::mcor` / `Config::avc`; the algorithms live beside them in [`crate::techniques`]
+//! (AVC's residual in [`crate::optimize::virtual_camera`], as the solvers evaluate it) and plug
+//! into the hook points of [`crate::module::pose_estimation`] (MC-OR gates observations before every
 //! pose-optimization round; AVC replaces the residual of keypoints with depth, in pose-only
 //! optimization and in local BA).
 
 use serde::{Deserialize, Serialize};
+
+pub use crate::optimize::AvcAim;
 
 /// Map-point Consensus based Outlier Rejection (paper III-A, Algorithm 1): thresholds on the
 /// feature-level and cluster-level distances between a map point M, the running centroid G of
@@ -102,19 +105,4 @@ impl Default for AvcParams {
             aim: AvcAim::Angle,
         }
     }
-}
-
-/// How [`VirtualCameraResidual::aim_at`](crate::techniques::VirtualCameraResidual::aim_at)
-/// places the virtual camera C' = b u, u the unit in-image direction of DD' (Eq. 10, 11).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum AvcAim {
-    /// C' = b (cos a, sin a), a = atan2(u): the reference every result was made with.
-    #[default]
-    Angle,
-    /// C' = b u directly: the same point up to an ulp or two, without the atan2, sin and cos
-    /// that are 37 % of AVC's remaining cost over the baseline (an approximation of the
-    /// reference's bits, not of the paper: trajectories differ in their last digits; tested
-    /// within 1e-9 m of the reference on pose optimization). Off by default.
-    Direct,
 }
