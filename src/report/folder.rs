@@ -223,11 +223,17 @@ fn write_index(
         .collect();
     let perturbed = if points.is_empty() {
         String::new()
-    } else {
+    } else if points.contains("none") {
         format!(
             " at {} perturbation points (the unperturbed one and {} levels; `perturbation` in runs.csv)",
             points.len(),
-            points.len().saturating_sub(1)
+            points.len() - 1
+        )
+    } else {
+        format!(
+            " under {} fixed perturbation{} (`--perturb-with`; `perturbation` in runs.csv)",
+            points.len(),
+            if points.len() == 1 { "" } else { "s" }
         )
     };
     let _ = writeln!(

@@ -14,6 +14,8 @@ use std::fmt::Write as _;
 pub const BREAK_FACTOR: f64 = 2.0;
 /// See [`BREAK_FACTOR`] (metres).
 pub const BREAK_MARGIN_M: f64 = 0.01;
+/// Bootstrap resamples behind a breaking level's uncertainty.
+pub const BOOTSTRAP_RESAMPLES: usize = 1000;
 
 /// The runs of one system at one level.
 #[derive(Clone, Debug, PartialEq)]
@@ -83,6 +85,71 @@ impl Curve {
             .iter()
             .find(|l| l.is_failure() || l.mean().is_some_and(|m| m > limit))
             .map(|l| l.level)
+    }
+
+    /// How sure the breaking level is: over [`BOOTSTRAP_RESAMPLES`] resamples of the curve
+    /// (each level's runs, failures included, drawn with replacement; seeded by the sequence
+    /// and system, so the same records give the same shares), the share whose breaking level
+    /// is each level after 0, and the share in which the curve holds over every level. `None`
+    /// without a level 0.
+    pub fn breaking_shares(&self) -> Option<(Vec<(f64, f64)>, f64)> {
+        use rand::{Rng, SeedableRng};
+        self.levels.first().filter(|l| l.level == 0.0)?;
+        let key = format!("{}\u{1f}{}", self.sequence, self.system);
+        let mut rng =
+            rand_chacha::ChaCha8Rng::seed_from_u64(slam_core::hash::fnv1a(key.as_bytes()));
+        let mut counts = vec![0usize; self.levels.len()];
+        let mut holds = 0usize;
+        for _ in 0..BOOTSTRAP_RESAMPLES {
+            let resampled: Vec<LevelStats> = self
+                .levels
+                .iter()
+                .map(|l| {
+                    // The level's runs: ATEs, then its failures.
+                    let n = l.n.max(l.ates.len());
+                    let mut ates = Vec::with_capacity(n);
+                    let mut failed = 0;
+                    for _ in 0..n {
+                        let k = rng.random_range(0..n);
+                        match l.ates.get(k) {
+                            Some(a) => ates.push(*a),
+                            None => failed += 1,
+                        }
+                    }
+                    ates.sort_by(f64::total_cmp);
+                    LevelStats {
+                        level: l.level,
+                        n,
+                        failed,
+                        ates,
+                        fps: l.fps,
+                    }
+                })
+                .collect();
+            let curve = Curve {
+                sequence: String::new(),
+                system: String::new(),
+                label: String::new(),
+                levels: resampled,
+            };
+            match curve.breaking_level() {
+                Some(b) => {
+                    if let Some(i) = self.levels.iter().position(|l| l.level == b) {
+                        counts[i] += 1;
+                    }
+                }
+                None => holds += 1,
+            }
+        }
+        let total = BOOTSTRAP_RESAMPLES as f64;
+        Some((
+            self.levels[1..]
+                .iter()
+                .zip(&counts[1..])
+                .map(|(l, c)| (l.level, *c as f64 / total))
+                .collect(),
+            holds as f64 / total,
+        ))
     }
 }
 
@@ -267,7 +334,23 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
                 ),
                 None => "no level 0".into(),
             };
-            let _ = writeln!(md, "| {} | {} | {breaking} |", c.label, cells.join(" | "));
+            let shares = c.breaking_shares().map_or_else(String::new, |(at, held)| {
+                let mut parts: Vec<String> = at
+                    .iter()
+                    .filter(|(_, s)| *s >= 0.05)
+                    .map(|(l, s)| format!("{} {:.0} %", level_text(*l), s * 100.0))
+                    .collect();
+                if held >= 0.05 {
+                    parts.push(format!("holds {:.0} %", held * 100.0));
+                }
+                format!(" ({})", parts.join(", "))
+            });
+            let _ = writeln!(
+                md,
+                "| {} | {} | {breaking}{shares} |",
+                c.label,
+                cells.join(" | ")
+            );
         }
         md.push('\n');
     }
@@ -281,7 +364,10 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
         "ATE RMSE in millimetres, mean ± std over the runs that did not fail (up to {runs} per cell); \
          'F (k/n)': more than half of the n runs failed (under 80 % of the frames tracked, or no ATE). \
          Breaking level: the first level whose mean ATE exceeds max({BREAK_FACTOR} x the level-0 ATE, \
-         level-0 ATE + {} cm), or that fails; 'none up to L': the system held over every level swept.",
+         level-0 ATE + {} cm), or that fails; 'none up to L': the system held over every level swept. \
+         In brackets, how sure that is: the share of {BOOTSTRAP_RESAMPLES} bootstrap resamples of \
+         the runs (each level's drawn with replacement, failures included) that break at each \
+         level, and that hold (shares under 5 % left out; the CSV has every one).",
         BREAK_MARGIN_M * 100.0
     );
     // The tidy CSV.
@@ -304,11 +390,32 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
         "max_m",
         "fps",
         "breaking_level",
+        "held",
+        "breaks_here_share",
+        "holds_share",
     ]);
     let opt = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
     for c in curves {
-        let b = opt(c.breaking_level());
+        // A curve that held reports the highest level swept, flagged `held`.
+        let has_zero = c.levels.first().is_some_and(|l| l.level == 0.0);
+        let held = has_zero && c.breaking_level().is_none();
+        let b = if has_zero {
+            opt(c
+                .breaking_level()
+                .or_else(|| c.levels.last().map(|l| l.level)))
+        } else {
+            String::new()
+        };
+        let held = if has_zero {
+            held.to_string()
+        } else {
+            String::new()
+        };
+        let shares = c.breaking_shares();
         for l in &c.levels {
+            let here = shares
+                .as_ref()
+                .and_then(|(at, _)| at.iter().find(|(lv, _)| *lv == l.level).map(|(_, s)| *s));
             let _ = w.write_record([
                 c.sequence.clone(),
                 c.system.clone(),
@@ -327,6 +434,9 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
                 opt(l.ates.last().copied()),
                 format!("{:.2}", l.fps),
                 b.clone(),
+                held.clone(),
+                opt(here),
+                opt(shares.as_ref().map(|(_, h)| *h)),
             ]);
         }
     }
@@ -377,6 +487,44 @@ mod tests {
     }
 
     #[test]
+    fn a_borderline_breaking_level_is_uncertain_and_a_clear_one_is_not() {
+        let mut r = Vec::new();
+        for seed in 0..10 {
+            r.push(rec("orb", None, 0.0, seed, 0.002, false));
+            // Level 1: half the runs far above the 12 mm limit, half below: the mean (about
+            // 13 mm) breaks, a resample may not.
+            let a = if seed % 2 == 0 { 0.019 } else { 0.007 };
+            r.push(rec("orb", Some("depth-axial"), 1.0, seed, a, false));
+            // Level 2: every run far above.
+            r.push(rec("orb", Some("depth-axial"), 2.0, seed, 0.05, false));
+        }
+        let c = curves(&r, &BTreeMap::new());
+        let curve = &c["depth-axial"][0];
+        assert_eq!(curve.breaking_level(), Some(1.0));
+        let (at, holds) = curve.breaking_shares().unwrap();
+        assert_eq!(at.len(), 2);
+        let (s1, s2) = (at[0].1, at[1].1);
+        assert!(s1 > 0.5 && s1 < 0.95, "level 1: {s1}");
+        assert!(
+            (s1 + s2 + holds - 1.0).abs() < 1e-12 && holds == 0.0,
+            "{s2} {holds}"
+        );
+        // Seeded: the same records give the same shares.
+        assert_eq!(
+            curve.breaking_shares(),
+            c["depth-axial"][0].breaking_shares()
+        );
+        let t = table("depth-axial", &c["depth-axial"]);
+        let mut rdr = csv::Reader::from_reader(t.csv.as_bytes());
+        let h = rdr.headers().unwrap().clone();
+        let col = |n: &str| h.iter().position(|x| x == n).unwrap();
+        let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
+        let one = rows.iter().find(|r| &r[col("level")] == "1").unwrap();
+        assert_eq!(one[col("breaks_here_share")].parse::<f64>().unwrap(), s1);
+        assert_eq!(&one[col("held")], "false");
+    }
+
+    #[test]
     fn breaking_levels_follow_the_definition() {
         let mut r = Vec::new();
         for seed in 0..2 {
@@ -396,8 +544,9 @@ mod tests {
         assert_eq!(axial[1].breaking_level(), Some(4.0));
         let t = table("depth-axial", axial);
         assert!(
-            t.markdown
-                .contains("| ORB-SLAM2 (ours) | 2.00 ± 0.00 | 3.90 ± 0.00 | 12.50 ± 0.00 |  | 2 |"),
+            t.markdown.contains(
+                "| ORB-SLAM2 (ours) | 2.00 ± 0.00 | 3.90 ± 0.00 | 12.50 ± 0.00 |  | 2 (2 100 %) |"
+            ),
             "{}",
             t.markdown
         );
@@ -412,6 +561,9 @@ mod tests {
         assert_eq!(&orb2[3], "true");
         assert_eq!(orb2[10].parse::<f64>().unwrap(), 0.0125);
         assert_eq!(&orb2[16], "2");
+        // A curve that held: the highest level swept, flagged, a number not an empty cell.
+        let avc0 = rows.iter().find(|r| &r[1] == "avc").unwrap();
+        assert_eq!((&avc0[16], &avc0[17]), ("4", "false"));
         // JPEG: lower quality is stronger.
         let mut j = vec![rec("orb", None, 0.0, 0, 0.002, false)];
         for q in [90.0, 30.0, 60.0] {

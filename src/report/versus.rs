@@ -183,7 +183,10 @@ fn point_of(r: &RunRecord) -> String {
             Some(l) => format!("{f}:{l}"),
             None => f.clone(),
         },
-        (None, Some(p)) => p.clone(),
+        (None, Some(p)) => perturb::Chain::parse(p)
+            .ok()
+            .and_then(|c| perturb::NamedChain::recognise(&c))
+            .map_or_else(|| p.clone(), |(c, l)| format!("{}:{l}", c.name())),
         (None, None) => "none".into(),
     }
 }

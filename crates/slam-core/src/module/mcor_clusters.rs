@@ -15,7 +15,7 @@
 //! feature. Before this cache every gate rebuilt every cluster: 54 % of an MC-OR run's
 //! instructions on the 300-frame kinect sequence.
 //!
-//! Beside the clusters, the cache keeps the verdicts of the frame being gated ([`GateMemo`](crate::techniques::mcor_prepared::GateMemo)),
+//! Beside the clusters, the cache keeps the verdicts of the frame being gated ([`crate::techniques::mcor_prepared::GateMemo`]),
 //! so that its gates compute a verdict again only when the pose moved far enough to change it.
 
 use nalgebra::Isometry3;

@@ -3,7 +3,7 @@
 //! reference keyframe, local map), [`keyframe_decision`] and [`keyframe_insertion`] (when and how a
 //! frame becomes a keyframe), [`local_mapping`] (new points, fusion, culling, local BA) and
 //! [`relocalization`], [`loop_closing`] with its [`essential_graph`] and [`global_ba`]. [`mcor_clusters`]
-//! keeps MC-OR's clusters of a frame's matches for all of the frame's gates; [`noise`]
+//! keeps MC-OR's clusters of a frame's matches for all of the frame's gates; [`crate::techniques::params`]
 //! holds the parameters of the paper's two techniques.
 
 pub mod essential_graph;
