@@ -185,7 +185,7 @@ fn point_of(r: &RunRecord) -> String {
         },
         (None, Some(p)) => perturb::Chain::parse(p)
             .ok()
-            .and_then(|c| perturb::NamedChain::recognise(&c))
+            .and_then(|c| c.named())
             .map_or_else(|| p.clone(), |(c, l)| format!("{}:{l}", c.name())),
         (None, None) => "none".into(),
     }

@@ -211,20 +211,6 @@ impl NamedChain {
             .collect()
     }
 
-    /// The named chain and level whose members `chain` is (in any order), if it is one: what
-    /// a table prints for a sweep that recorded a chain's members (`kinect-fr1:2` rather than
-    /// its nine members).
-    pub fn recognise(chain: &crate::Chain) -> Option<(NamedChain, f64)> {
-        let spelled = chain.effective().to_string();
-        NamedChain::ALL.into_iter().find_map(|c| {
-            let first = c.members().iter().find(|m| m.level != 0.0)?;
-            let p = chain.0.iter().find(|p| p.family == first.family)?;
-            let level = (p.level / first.level * 1e6).round() / 1e6;
-            (level > 0.0 && crate::Chain(c.at(level)).effective().to_string() == spelled)
-                .then_some((c, level))
-        })
-    }
-
     /// The largest chain level at which every member stays inside its family's range.
     pub fn max_level(self) -> f64 {
         self.members()
@@ -250,33 +236,6 @@ impl fmt::Display for NamedChain {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_chain_spelled_by_its_members_is_recognised_with_its_level() {
-        for c in NamedChain::ALL {
-            for level in [0.5, 1.0, 2.0, 5.0] {
-                let spelled = crate::Chain(c.at(level)).effective().to_string();
-                let parsed = crate::Chain::parse(&spelled).unwrap();
-                assert_eq!(
-                    NamedChain::recognise(&parsed),
-                    Some((c, level)),
-                    "{spelled}"
-                );
-            }
-        }
-        // One member changed, or one left out: not the chain.
-        let mut members = NamedChain::KinectFr1.at(2.0);
-        members[0].level *= 1.5;
-        assert_eq!(NamedChain::recognise(&crate::Chain(members.clone())), None);
-        assert_eq!(
-            NamedChain::recognise(&crate::Chain(members[1..].to_vec())),
-            None
-        );
-        assert_eq!(
-            NamedChain::recognise(&crate::Chain::parse("depth-axial:4").unwrap()),
-            None
-        );
-    }
 
     #[test]
     fn members_are_inside_their_ranges_and_scale_with_the_level() {

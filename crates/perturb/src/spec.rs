@@ -33,6 +33,20 @@ impl Chain {
         Ok(Chain(out))
     }
 
+    /// The named chain and level whose members this chain is (in any order), if it is one:
+    /// what a table prints for a sweep that recorded a chain's members (`kinect-fr1:2` rather
+    /// than its nine members).
+    pub fn named(&self) -> Option<(NamedChain, f64)> {
+        let spelled = self.effective().to_string();
+        NamedChain::ALL.into_iter().find_map(|c| {
+            let first = c.members().iter().find(|m| m.level != 0.0)?;
+            let p = self.0.iter().find(|p| p.family == first.family)?;
+            let level = (p.level / first.level * 1e6).round() / 1e6;
+            (level > 0.0 && Chain(c.at(level)).effective().to_string() == spelled)
+                .then_some((c, level))
+        })
+    }
+
     /// Whether any effective member changes the camera the system is given.
     pub fn touches_calibration(&self) -> bool {
         self.effective()

@@ -524,3 +524,21 @@ fn colour_stays_colour_and_level_zero_keeps_every_colour_byte() {
         .iter()
         .all(|&p| c.data[3 * p] == c.data[3 * p + 1] && c.data[3 * p + 1] == c.data[3 * p + 2]));
 }
+
+/// A recorded chain's members are recognised as the named chain at its level.
+#[test]
+fn a_chain_spelled_by_its_members_is_recognised_with_its_level() {
+    for c in NamedChain::ALL {
+        for level in [0.5, 1.0, 2.0, 5.0] {
+            let spelled = Chain(c.at(level)).effective().to_string();
+            let parsed = Chain::parse(&spelled).unwrap();
+            assert_eq!(parsed.named(), Some((c, level)), "{spelled}");
+        }
+    }
+    // One member changed, or one left out: not the chain.
+    let mut members = NamedChain::KinectFr1.at(2.0);
+    members[0].level *= 1.5;
+    assert_eq!(Chain(members.clone()).named(), None);
+    assert_eq!(Chain(members[1..].to_vec()).named(), None);
+    assert_eq!(Chain::parse("depth-axial:4").unwrap().named(), None);
+}
