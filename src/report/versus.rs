@@ -379,41 +379,7 @@ fn render_rows(
             });
         }
         md_rows.push(row);
-        let s = r.summary;
-        let c = r.comparison;
-        csv_rows.push(vec![
-            r.sequence.clone(),
-            r.point.clone(),
-            r.axis.as_ref().map_or_else(String::new, |a| a.0.clone()),
-            num(r.axis.as_ref().and_then(|a| a.1)),
-            r.config.clone(),
-            num(r.variant.taus.map(|t| t.0)),
-            num(r.variant.taus.map(|t| t.1)),
-            num(r.variant.taus.map(|t| t.2)),
-            num(r.variant.b),
-            r.runs.to_string(),
-            r.failed.to_string(),
-            num(s.map(|s| s.mean)),
-            num(s.and_then(|s| s.std)),
-            num(s.map(|s| s.median)),
-            num(s.and_then(|s| s.ci95.map(|c| c.0))),
-            num(s.and_then(|s| s.ci95.map(|c| c.1))),
-            c.map_or_else(String::new, |c| c.test.name().replace(' ', "_")),
-            num(c.map(|c| c.n.0 as f64)),
-            num(c.map(|c| c.diff)),
-            num(c.map(|c| c.diff_ci95.0)),
-            num(c.map(|c| c.diff_ci95.1)),
-            num(c.map(|c| c.relative_pct())),
-            num(c.map(|c| c.relative_ci95_pct().0)),
-            num(c.map(|c| c.relative_ci95_pct().1)),
-            num(c.map(|c| c.df)),
-            num(c.map(|c| c.t)),
-            num(c.map(|c| c.p)),
-            num(*ph),
-            ph.map_or_else(String::new, |p| u8::from(p <= ALPHA).to_string()),
-            num(r.paper.map(|p| p.0)),
-            num(r.paper.map(|p| p.1)),
-        ]);
+        csv_rows.push(csv_row(r, *ph));
     }
     let notes = format!(
         "Mean of the runs that did not fail with the 95 % interval of the mean (Student's t); \
@@ -438,6 +404,51 @@ fn render_rows(
         &header,
         &md_rows,
     );
+    t.csv = write_csv(&csv_rows);
+    t
+}
+
+/// One row of the tidy CSV: every number of a row, in metres and %.
+fn csv_row(r: &Row, ph: Option<f64>) -> Vec<String> {
+    let s = r.summary;
+    let c = r.comparison;
+    vec![
+        r.sequence.clone(),
+        r.point.clone(),
+        r.axis.as_ref().map_or_else(String::new, |a| a.0.clone()),
+        num(r.axis.as_ref().and_then(|a| a.1)),
+        r.config.clone(),
+        num(r.variant.taus.map(|t| t.0)),
+        num(r.variant.taus.map(|t| t.1)),
+        num(r.variant.taus.map(|t| t.2)),
+        num(r.variant.b),
+        r.runs.to_string(),
+        r.failed.to_string(),
+        num(s.map(|s| s.mean)),
+        num(s.and_then(|s| s.std)),
+        num(s.map(|s| s.median)),
+        num(s.and_then(|s| s.ci95.map(|c| c.0))),
+        num(s.and_then(|s| s.ci95.map(|c| c.1))),
+        c.map_or_else(String::new, |c| c.test.name().replace(' ', "_")),
+        num(c.map(|c| c.n.0 as f64)),
+        num(c.map(|c| c.diff)),
+        num(c.map(|c| c.diff_ci95.0)),
+        num(c.map(|c| c.diff_ci95.1)),
+        num(c.map(|c| c.relative_pct())),
+        num(c.map(|c| c.relative_ci95_pct().0)),
+        num(c.map(|c| c.relative_ci95_pct().1)),
+        num(c.map(|c| c.df)),
+        num(c.map(|c| c.t)),
+        num(c.map(|c| c.p)),
+        num(ph),
+        ph.map_or_else(String::new, |p| u8::from(p <= ALPHA).to_string()),
+        num(r.paper.map(|p| p.0)),
+        num(r.paper.map(|p| p.1)),
+    ]
+}
+
+/// The tidy CSV of `rows` under its header.
+fn write_csv(rows: &[Vec<String>]) -> String {
     let csv_header = [
         "sequence",
         "perturbation",
@@ -473,11 +484,10 @@ fn render_rows(
     ];
     let mut w = csv::Writer::from_writer(Vec::new());
     let _ = w.write_record(csv_header);
-    for r in &csv_rows {
+    for r in rows {
         let _ = w.write_record(r);
     }
-    t.csv = String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default();
-    t
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
 /// A p-value as a table prints it: three significant digits, `< 1e-6` below.
