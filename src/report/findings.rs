@@ -10,7 +10,6 @@
 
 use crate::report::stats::holm;
 use crate::report::versus::ALPHA;
-use crate::sweep::plan::ConfigKind;
 use anyhow::{Context, Result};
 use datasets::Catalog;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
@@ -144,21 +143,8 @@ fn link(base: &Path, folder: &Path, file: &str) -> String {
 
 /// The paper's relative difference (%) of `config` on the row a sequence is or imitates.
 fn paper_gain(catalog: &Catalog, seq: &str, config: &str) -> Option<(String, f64)> {
-    let entry = catalog.get(seq).ok()?;
-    let row = match entry.imitates.as_deref() {
-        Some(name) => catalog.get(name).ok()?,
-        None => entry,
-    };
-    let p = row.paper.as_ref()?;
-    let base = p.orb_slam2?.metres()?;
-    let col = match ConfigKind::parse(config).ok()? {
-        ConfigKind::Mcor => p.mcor,
-        ConfigKind::Avc => p.avc,
-        ConfigKind::McorAvc => p.mcor_avc,
-        _ => None,
-    }?
-    .metres()?;
-    Some((row.name.clone(), 100.0 * (col - base) / base))
+    let (col, base, row) = crate::report::versus::paper_figures(catalog, seq, config)?;
+    Some((row, 100.0 * (col - base) / base))
 }
 
 const TECHNIQUES: [&str; 3] = ["mcor", "avc", "mcor+avc"];

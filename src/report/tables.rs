@@ -129,7 +129,7 @@ struct Group<'a> {
 }
 
 /// `v` as a CSV number (every digit an f64 needs), empty when absent.
-fn num(v: Option<f64>) -> String {
+pub(crate) fn num(v: Option<f64>) -> String {
     v.map(|x| format!("{x}")).unwrap_or_default()
 }
 

@@ -9,7 +9,7 @@
 
 use crate::report::markdown::{render, system_label, Rendered};
 use crate::report::stats::{holm, paired, summarize, welch, Comparison, Summary};
-use crate::report::tables::{are_default_params, mm_decimals, sequence_order};
+use crate::report::tables::{are_default_params, mm_decimals, num, sequence_order};
 use crate::sweep::plan::ConfigKind;
 use crate::sweep::store::RunRecord;
 use datasets::Catalog;
@@ -157,8 +157,12 @@ struct Row {
 }
 
 /// The paper's figure (metres) of `config`'s column for the row `seq` is or imitates, with its
-/// ORB-SLAM2 figure.
-fn paper_figures(catalog: &Catalog, seq: &str, config: &str) -> Option<(f64, f64)> {
+/// ORB-SLAM2 figure and the row's name.
+pub(crate) fn paper_figures(
+    catalog: &Catalog,
+    seq: &str,
+    config: &str,
+) -> Option<(f64, f64, String)> {
     let entry = catalog.get(seq).ok()?;
     let row = match entry.imitates.as_deref() {
         Some(name) => catalog.get(name).ok()?,
@@ -172,7 +176,7 @@ fn paper_figures(catalog: &Catalog, seq: &str, config: &str) -> Option<(f64, f64
         ConfigKind::McorAvc => p.mcor_avc,
         _ => None,
     }?;
-    Some((col.metres()?, p.orb_slam2?.metres()?))
+    Some((col.metres()?, p.orb_slam2?.metres()?, row.name.clone()))
 }
 
 /// The point a run belongs to, as the table names it: the axis and level where the sweep had
@@ -189,10 +193,6 @@ fn point_of(r: &RunRecord) -> String {
             .map_or_else(|| p.clone(), |(c, l)| format!("{}:{l}", c.name())),
         (None, None) => "none".into(),
     }
-}
-
-fn num(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
 }
 
 /// The table of every system against the baseline (our `orb`) at every sequence and point of
@@ -268,7 +268,7 @@ pub fn versus_baseline(
                     summary: summarize(&values),
                     comparison: (*v != baseline).then(|| compare(&base, &these)).flatten(),
                     paper: if paper && v.is_default() {
-                        paper_figures(catalog, &seq, &v.config)
+                        paper_figures(catalog, &seq, &v.config).map(|(a, b, _)| (a, b))
                     } else {
                         None
                     },
