@@ -3,6 +3,7 @@
 //! (`slam-core`, `ate-eval`, `datasets`, `synth`).
 
 mod analysis;
+mod columns;
 mod commands;
 mod config_file;
 mod difficulty;

@@ -208,22 +208,37 @@ fn fetch_list_lines_up_its_columns_and_names_what_each_twin_imitates() {
     let text = String::from_utf8_lossy(&out.stdout);
     let lines: Vec<&str> = text.lines().collect();
     assert!(lines.len() > 20, "{text}");
-    // The class and state columns start at the same offset on every line.
-    let width = lines
+    // A header names the columns; each column starts where its header does on every line,
+    // preceded by two blanks.
+    let header = lines[0];
+    let starts: Vec<usize> = ["class", "twin", "state"]
         .iter()
-        .map(|l| l.split_whitespace().next().unwrap().len())
-        .max()
-        .unwrap();
-    for l in &lines {
-        assert_eq!(&l[width..width + 1], " ", "{l:?}");
-        assert!(
-            l.len() > width + 7 && &l[width + 6..width + 7] == " ",
-            "{l:?}"
-        );
+        .map(|h| header.find(&format!("  {h}")).unwrap() + 2)
+        .collect();
+    assert!(header.starts_with("name "), "{header}");
+    for l in &lines[1..] {
+        for &s in &starts {
+            assert_eq!(&l[s - 2..s], "  ", "{l:?}");
+            assert_ne!(&l[s..s + 1], " ", "{l:?}");
+        }
     }
-    let twin = lines
-        .iter()
-        .find(|l| l.starts_with("twin_fr3_office "))
-        .unwrap();
+    let column = |l: &str, i: usize| {
+        l[starts[i]..]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    let row = |name: &str| {
+        *lines
+            .iter()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .unwrap()
+    };
+    let twin = row("twin_fr3_office");
     assert!(twin.ends_with("synthetic, imitates fr3_office"), "{twin}");
+    // A real sequence names its twin; a synthetic one has none.
+    assert_eq!(column(row("fr1_desk"), 1), "twin_fr1_desk");
+    assert_eq!(column(row("fr1_desk"), 0), "easy");
+    assert_eq!(column(row("twin_fr1_desk"), 1), "-");
 }

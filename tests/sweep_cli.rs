@@ -273,3 +273,74 @@ fn table_draws_rc_against_the_baseline_where_both_ran() {
     assert!(plain.join("figures/ate_spread.png").exists());
     assert!(!plain.join("figures/rc_vs_baseline.png").exists());
 }
+
+#[test]
+fn table3_sweeps_every_row_that_has_a_twin_under_five_columns() {
+    // The rows and their twins as the catalog states them.
+    let catalog = datasets::Catalog::embedded();
+    let rows: Vec<&str> = catalog
+        .entries()
+        .iter()
+        .filter(|e| !e.is_synthetic() && e.paper.is_some())
+        .map(|e| e.name.as_str())
+        .collect();
+    assert_eq!(rows.len(), 31, "Table III: 20 TUM and 11 EuRoC rows");
+    let twin_of = |row: &str| {
+        catalog
+            .entries()
+            .iter()
+            .find(|t| t.is_synthetic() && t.imitates.as_deref() == Some(row))
+            .map(|t| t.name.clone())
+    };
+    let missing: Vec<&str> = rows
+        .iter()
+        .copied()
+        .filter(|r| twin_of(r).is_none())
+        .collect();
+    let twins = rows.len() - missing.len();
+    assert!(twins >= 13, "{twins}");
+    // Planned, nothing run (--max-runs 0): 5 columns x 10 runs per twin.
+    let out = tmpdir("sweep-table3");
+    let o = noisefree_ok(&[
+        "sweep",
+        "--table3",
+        "--max-runs",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("{} runs in the sweep", twins * 5 * 10)),
+        "{err}"
+    );
+    if missing.is_empty() {
+        assert!(!err.contains("without a twin"), "{err}");
+    } else {
+        assert!(
+            err.contains(&format!(
+                "Table III rows without a twin, left out: {}",
+                missing.join(", ")
+            )),
+            "{err}"
+        );
+    }
+    // --configs replaces the five columns.
+    let o = noisefree_ok(&[
+        "sweep",
+        "--table3",
+        "--configs",
+        "orb",
+        "--runs",
+        "2",
+        "--max-runs",
+        "0",
+        "--out",
+        tmpdir("sweep-table3-orb").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("{} runs in the sweep", twins * 2)),
+        "{err}"
+    );
+}

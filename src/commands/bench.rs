@@ -20,11 +20,11 @@
 //! [`McorParams::view_stride`](slam_core::techniques::params::McorParams::view_stride)). Variants
 //! combine: `mcor+avc:direct:stride2`.
 
-use crate::commands::sweep::job_config;
 use crate::config_file::{base_config, overlay_file};
 use crate::regress::cases::trajectory_hash;
 use crate::runner::{run_extracted, ExtractedSequence};
 use crate::select::{open, LoadOptions, Source};
+use crate::sweep::job::job_config;
 use crate::sweep::plan::{ConfigKind, Job, Params, RunConfig};
 use anyhow::{bail, Context, Result};
 use ate_eval::io::write_atomic;

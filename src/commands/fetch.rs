@@ -33,25 +33,16 @@ pub struct FetchArgs {
     pub list: bool,
 }
 
-/// Runs `noisefree fetch`.
-pub fn run(args: FetchArgs) -> anyhow::Result<()> {
-    let catalog = match &args.catalog {
-        Some(p) => Catalog::load(p)?,
-        None => Catalog::embedded(),
-    };
-    let root = data_root(args.data_dir.as_deref());
-    if args.list {
-        use std::io::Write;
-        let mut out = std::io::stdout().lock();
-        // Columns as wide as their longest entry, so every row lines up.
-        let width = catalog
-            .entries()
-            .iter()
-            .map(|e| e.name.len())
-            .max()
-            .unwrap_or(0);
-        for e in catalog.entries() {
-            let state = match e.path(&root) {
+/// One line per catalogued sequence under a header: its name, Table III class, the twin that
+/// imitates it (real sequences) and where it is (present with its path, missing, or
+/// synthetic with what it imitates), every column as wide as its longest entry. A closed pipe
+/// (`| head`) just ends the listing.
+fn write_list(out: &mut impl std::io::Write, catalog: &Catalog, root: &std::path::Path) {
+    let rows: Vec<[String; 4]> = catalog
+        .entries()
+        .iter()
+        .map(|e| {
+            let state = match e.path(root) {
                 Some(p) if p.exists() => format!("present  {}", p.display()),
                 Some(_) => "missing".to_string(),
                 None => match &e.imitates {
@@ -62,12 +53,45 @@ pub fn run(args: FetchArgs) -> anyhow::Result<()> {
             let class = e
                 .class
                 .map(|c| format!("{c:?}").to_lowercase())
-                .unwrap_or_default();
-            // A closed pipe (`| head`) just ends the listing.
-            if writeln!(out, "{:<width$} {:<5} {}", e.name, class, state).is_err() {
-                break;
-            }
+                .unwrap_or_else(|| "-".into());
+            let twin = if e.is_synthetic() {
+                "-".to_string()
+            } else {
+                catalog
+                    .entries()
+                    .iter()
+                    .find(|t| t.imitates.as_deref() == Some(e.name.as_str()))
+                    .map_or_else(|| "-".to_string(), |t| t.name.clone())
+            };
+            [e.name.clone(), class, twin, state]
+        })
+        .collect();
+    let header = ["name", "class", "twin", "state"].map(String::from);
+    let width = |i: usize| {
+        std::iter::once(&header)
+            .chain(&rows)
+            .map(|r| r[i].len())
+            .max()
+            .unwrap_or(0)
+    };
+    let (w0, w1, w2) = (width(0), width(1), width(2));
+    for r in std::iter::once(&header).chain(&rows) {
+        if writeln!(out, "{:<w0$}  {:<w1$}  {:<w2$}  {}", r[0], r[1], r[2], r[3]).is_err() {
+            break;
         }
+    }
+}
+
+/// Runs `noisefree fetch`.
+pub fn run(args: FetchArgs) -> anyhow::Result<()> {
+    let catalog = match &args.catalog {
+        Some(p) => Catalog::load(p)?,
+        None => Catalog::embedded(),
+    };
+    let root = data_root(args.data_dir.as_deref());
+    if args.list {
+        let mut out = std::io::stdout().lock();
+        write_list(&mut out, &catalog, &root);
         return Ok(());
     }
     let mut names: Vec<String> = Vec::new();

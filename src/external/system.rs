@@ -326,7 +326,7 @@ pub fn systems_in_file(path: &Path) -> Result<BTreeMap<String, SystemDef>> {
     let mut out = BTreeMap::new();
     for (name, mut def) in defs {
         def.fill_config_dir(&dir);
-        if crate::sweep::plan::ConfigKind::parse(&name).is_ok() {
+        if crate::columns::ConfigKind::parse(&name).is_ok() {
             bail!(
                 "{}: system {name:?} has the name of one of noisefree's configurations",
                 path.display()

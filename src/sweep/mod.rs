@@ -1,5 +1,11 @@
 //! Sweeps: the expansion of sequences x configurations x parameter grids x seeds into runs
-//! ([`plan`]), and the append-only, resumable record of finished runs ([`store`]).
+//! ([`plan`]), the sweep's phases from plan to record ([`execute`]), one run of ours
+//! ([`job`]) and of an external system ([`external_run`]), the bars ([`progress`]), and the
+//! append-only, resumable record of finished runs ([`store`]).
 
+pub mod execute;
+pub mod external_run;
+pub mod job;
 pub mod plan;
+pub mod progress;
 pub mod store;

@@ -2,165 +2,8 @@
 //! into shards for a cluster's job array.
 
 use anyhow::{bail, Context, Result};
-use slam_core::system::ClusterViews;
-use std::fmt;
 
-/// The paper's four columns of Table III (`mcor` and `mcor+avc` with the folder's MC-OR cluster
-/// reading, every frame by default), columns that name MC-OR's reading explicitly, and
-/// noisefree's rigid consensus.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum ConfigKind {
-    /// ORB-SLAM2 baseline (both techniques off).
-    Orb,
-    /// w/ MC-OR.
-    Mcor,
-    /// w/ AVC.
-    Avc,
-    /// w/ MC-OR + AVC.
-    McorAvc,
-    /// w/ MC-OR, clusters built from every frame that matched the point.
-    McorFrames,
-    /// w/ MC-OR (every-frame clusters) + AVC.
-    McorFramesAvc,
-    /// w/ MC-OR, clusters built from the observing keyframes only (the default before issue 18).
-    McorKeyframes,
-    /// w/ MC-OR (keyframe clusters) + AVC.
-    McorKeyframesAvc,
-    /// noisefree's rigid consensus (beyond the paper), neither MC-OR nor AVC.
-    Rc,
-}
-
-impl ConfigKind {
-    /// Every kind in the paper's column order.
-    pub const ALL: [ConfigKind; 4] = [
-        ConfigKind::Orb,
-        ConfigKind::Mcor,
-        ConfigKind::Avc,
-        ConfigKind::McorAvc,
-    ];
-
-    /// Every kind, the paper's four first (the column order of the tables).
-    pub const EVERY: [ConfigKind; 9] = [
-        ConfigKind::Orb,
-        ConfigKind::Mcor,
-        ConfigKind::Avc,
-        ConfigKind::McorAvc,
-        ConfigKind::McorFrames,
-        ConfigKind::McorFramesAvc,
-        ConfigKind::McorKeyframes,
-        ConfigKind::McorKeyframesAvc,
-        ConfigKind::Rc,
-    ];
-
-    /// Command-line / CSV spelling.
-    pub fn name(self) -> &'static str {
-        match self {
-            ConfigKind::Orb => "orb",
-            ConfigKind::Mcor => "mcor",
-            ConfigKind::Avc => "avc",
-            ConfigKind::McorAvc => "mcor+avc",
-            ConfigKind::McorFrames => "mcor-frames",
-            ConfigKind::McorFramesAvc => "mcor-frames+avc",
-            ConfigKind::McorKeyframes => "mcor-keyframes",
-            ConfigKind::McorKeyframesAvc => "mcor-keyframes+avc",
-            ConfigKind::Rc => "rc",
-        }
-    }
-
-    /// Parses the command-line spelling.
-    pub fn parse(s: &str) -> Result<ConfigKind> {
-        Ok(match s.trim() {
-            "orb" | "orb-slam2" | "baseline" => ConfigKind::Orb,
-            "mcor" => ConfigKind::Mcor,
-            "avc" => ConfigKind::Avc,
-            "mcor+avc" | "avc+mcor" => ConfigKind::McorAvc,
-            "mcor-frames" => ConfigKind::McorFrames,
-            "mcor-frames+avc" | "avc+mcor-frames" => ConfigKind::McorFramesAvc,
-            "mcor-keyframes" => ConfigKind::McorKeyframes,
-            "mcor-keyframes+avc" | "avc+mcor-keyframes" => ConfigKind::McorKeyframesAvc,
-            "rc" => ConfigKind::Rc,
-            other => bail!(
-                "unknown configuration {other:?}; expected orb, mcor, avc, mcor+avc, mcor-frames, \
-                 mcor-frames+avc, mcor-keyframes, mcor-keyframes+avc or rc"
-            ),
-        })
-    }
-
-    /// Whether MC-OR is on.
-    pub fn mcor(self) -> bool {
-        matches!(
-            self,
-            ConfigKind::Mcor
-                | ConfigKind::McorAvc
-                | ConfigKind::McorFrames
-                | ConfigKind::McorFramesAvc
-                | ConfigKind::McorKeyframes
-                | ConfigKind::McorKeyframesAvc
-        )
-    }
-
-    /// Whether the rigid consensus (beyond the paper) is on.
-    pub fn rc(self) -> bool {
-        self == ConfigKind::Rc
-    }
-
-    /// MC-OR's cluster reading this kind names; `None`: the configuration's (every frame
-    /// unless a config file says otherwise).
-    pub fn cluster_views(self) -> Option<ClusterViews> {
-        match self {
-            ConfigKind::McorFrames | ConfigKind::McorFramesAvc => Some(ClusterViews::EveryFrame),
-            ConfigKind::McorKeyframes | ConfigKind::McorKeyframesAvc => {
-                Some(ClusterViews::Keyframes)
-            }
-            _ => None,
-        }
-    }
-
-    /// Whether AVC is on.
-    pub fn avc(self) -> bool {
-        matches!(
-            self,
-            ConfigKind::Avc
-                | ConfigKind::McorAvc
-                | ConfigKind::McorFramesAvc
-                | ConfigKind::McorKeyframesAvc
-        )
-    }
-}
-
-impl fmt::Display for ConfigKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// What a run runs: one of noisefree's configurations, or an external SLAM program declared in
-/// the config file (`[systems.NAME]`, see `crate::external`), by its name.
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub enum RunConfig {
-    /// noisefree in one of its configurations.
-    Ours(ConfigKind),
-    /// An external system, by the name of its definition.
-    System(String),
-}
-
-impl RunConfig {
-    /// The name in `runs.csv` and on the command line.
-    pub fn name(&self) -> &str {
-        match self {
-            RunConfig::Ours(k) => k.name(),
-            RunConfig::System(s) => s,
-        }
-    }
-
-    /// noisefree's configuration kind, `None` for an external system.
-    pub fn kind(&self) -> Option<ConfigKind> {
-        match self {
-            RunConfig::Ours(k) => Some(*k),
-            RunConfig::System(_) => None,
-        }
-    }
-}
+pub use crate::columns::{ConfigKind, RunConfig};
 
 /// Parameters of one run beyond its configuration kind. `None` where the kind does not use it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, PartialOrd)]
@@ -204,7 +47,7 @@ impl Job {
             self.synth_seed,
         );
         if let Some(p) = &self.perturbation {
-            k += &perturbation_key(&p.chain, p.seed);
+            k += &perturbation_key(&p.chain.to_string(), p.seed);
         }
         k
     }
@@ -221,7 +64,7 @@ impl Job {
         match &self.perturbation {
             None => self.sequence.clone(),
             Some(p) => {
-                let safe = crate::file_name::safe(&p.chain);
+                let safe = crate::file_name::safe(&p.chain.to_string());
                 format!("{}/{safe}-ps{}", self.sequence, p.seed)
             }
         }
@@ -232,7 +75,7 @@ impl Job {
         match &self.perturbation {
             None => (None, None, None, None),
             Some(p) => (
-                Some(p.chain.clone()),
+                Some(p.chain.to_string()),
                 p.family.clone(),
                 p.level,
                 Some(p.seed),
@@ -245,9 +88,9 @@ impl Job {
 /// member it measures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PerturbPoint {
-    /// The chain actually applied, canonical (`depth-axial:2`, `occluders:1+depth-axial:2`,
-    /// `none`).
-    pub chain: String,
+    /// The chain actually applied, in its effective form (printed `depth-axial:2`,
+    /// `occluders:1+depth-axial:2`, `none`): parsed once where the sweep's flags are read.
+    pub chain: perturb::Chain,
     /// The family of the axis this point belongs to; `None` for the unperturbed point (every
     /// axis' level 0, shared by all of them).
     pub family: Option<String>,
@@ -272,7 +115,7 @@ pub fn perturbation_points(
     seed: u64,
 ) -> Vec<PerturbPoint> {
     let mut out: Vec<PerturbPoint> = Vec::new();
-    let base = with.effective().to_string();
+    let base = with.effective();
     if axes.is_empty() {
         if !with.is_identity() {
             out.push(PerturbPoint {
@@ -285,7 +128,10 @@ pub fn perturbation_points(
         return out;
     }
     let mut push = |p: PerturbPoint| {
-        if !out.iter().any(|q| q.chain == p.chain) {
+        if !out
+            .iter()
+            .any(|q| q.chain.to_string() == p.chain.to_string())
+        {
             out.push(p);
         }
     };
@@ -305,8 +151,8 @@ pub fn perturbation_points(
         for &level in &axis.levels {
             let mut chain = with.clone();
             chain.0.extend(axis.subject.at(level));
-            let canon = chain.effective().to_string();
-            if canon == base {
+            let canon = chain.effective();
+            if canon.to_string() == base.to_string() {
                 continue;
             }
             push(PerturbPoint {
@@ -349,6 +195,28 @@ pub fn with_perturbations(jobs: Vec<Job>, points: &[PerturbPoint], per_run: bool
         }
     }
     out
+}
+
+/// The paper's Table III as twins: for every row (a catalogued real sequence with the paper's
+/// figures, in the table's order) the synthetic twin that imitates it, and the rows no twin
+/// imitates.
+pub fn table3_twins(catalog: &datasets::Catalog) -> (Vec<String>, Vec<String>) {
+    let (mut twins, mut missing) = (Vec::new(), Vec::new());
+    for row in catalog
+        .entries()
+        .iter()
+        .filter(|e| !e.is_synthetic() && e.paper.is_some())
+    {
+        match catalog
+            .entries()
+            .iter()
+            .find(|t| t.is_synthetic() && t.imitates.as_deref() == Some(row.name.as_str()))
+        {
+            Some(t) => twins.push(t.name.clone()),
+            None => missing.push(row.name.clone()),
+        }
+    }
+    (twins, missing)
 }
 
 fn fmt_opt(v: Option<f64>) -> String {
@@ -605,7 +473,7 @@ mod tests {
             perturb::Axis::parse("depth-lateral:0,2").unwrap(),
         ];
         let pts = perturbation_points(&axes, &perturb::Chain::default(), 7);
-        let chains: Vec<&str> = pts.iter().map(|p| p.chain.as_str()).collect();
+        let chains: Vec<String> = pts.iter().map(|p| p.chain.to_string()).collect();
         assert_eq!(
             chains,
             ["none", "depth-axial:1", "depth-axial:2", "depth-lateral:2"]
@@ -614,8 +482,8 @@ mod tests {
         assert_eq!(pts[2].level, Some(2.0));
         let with = perturb::Chain::parse("occluders:1").unwrap();
         let pts = perturbation_points(&axes[..1], &with, 0);
-        assert_eq!(pts[0].chain, "occluders:1");
-        assert_eq!(pts[1].chain, "occluders:1+depth-axial:1");
+        assert_eq!(pts[0].chain.to_string(), "occluders:1");
+        assert_eq!(pts[1].chain.to_string(), "occluders:1+depth-axial:1");
         let grids = Grids {
             tau_mf: vec![0.7],
             tau_gf: vec![0.7],

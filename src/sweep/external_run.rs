@@ -4,15 +4,21 @@
 //! empty or unreadable trajectory is a failed run with its reason; the last lines of the
 //! program's output stay in the run folder.
 
-use super::export::OnDisk;
-use super::process;
-use super::system::{fill, Resolved, TrajectoryFormat};
+use crate::external::export::OnDisk;
+use crate::external::process;
+use crate::external::system::SystemDef;
+use crate::external::system::{fill, Resolved, TrajectoryFormat};
 use crate::runner::MIN_TRACKED_FRACTION;
+use crate::select::{LoadOptions, Source};
 use crate::sweep::plan::Job;
+use crate::sweep::progress::Progress;
 use crate::sweep::store::RunRecord;
+use crate::sweep::store::RunStore;
 use anyhow::{Context, Result};
 use ate_eval::{evaluate_ate, AteOptions, StampPolicy, Trajectory};
+use datasets::Catalog;
 use datasets::Sequence;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -89,6 +95,28 @@ pub fn run_job(
     job: &Job,
     out: &Path,
 ) -> Result<RunRecord> {
+    let launched = launch(system, disk, vocabulary, job, out)?;
+    score(system, disk, seq, job, out, &launched)
+}
+
+/// What a finished external process left: its run folder, the trajectory file it was told to
+/// write, its stderr log, and how it ended.
+struct Launched {
+    dir: PathBuf,
+    trajectory: PathBuf,
+    stderr: PathBuf,
+    finished: process::Finished,
+}
+
+/// Fills the system's command, working directory and environment for `job`, writes the
+/// command to `command.txt` (to re-run by hand), runs it and trims its logs.
+fn launch(
+    system: &Resolved,
+    disk: &OnDisk,
+    vocabulary: &Path,
+    job: &Job,
+    out: &Path,
+) -> Result<Launched> {
     let dir = run_dir(out, &job.sequence_folder(), &system.name, job.seed);
     if dir.exists() {
         std::fs::remove_dir_all(&dir).with_context(|| format!("clearing {}", dir.display()))?;
@@ -160,7 +188,30 @@ pub fn run_job(
     let finished = process::run(&argv, &workdir, &env, &stdout, &stderr, system.timeout)?;
     trim_log(&stdout);
     trim_log(&stderr);
+    Ok(Launched {
+        dir,
+        trajectory,
+        stderr,
+        finished,
+    })
+}
 
+/// Scores a finished run: the reason it failed (exit, timeout, trajectory missing, empty or
+/// unreadable), its ATE against the ground truth, its trajectory beside ours and its record.
+fn score(
+    system: &Resolved,
+    disk: &OnDisk,
+    seq: &Sequence,
+    job: &Job,
+    out: &Path,
+    launched: &Launched,
+) -> Result<RunRecord> {
+    let Launched {
+        dir,
+        trajectory,
+        stderr,
+        finished,
+    } = launched;
     let frames = disk.frames;
     let mut reason = finished.failure(system.timeout);
     let mut estimate: Option<Trajectory> = None;
@@ -173,10 +224,10 @@ pub fn run_job(
                     |n| n.to_string_lossy().into_owned()
                 )
             ));
-        } else if no_poses(&trajectory) {
+        } else if no_poses(trajectory) {
             reason = Some("empty trajectory".into());
         } else {
-            match read_estimate(&trajectory, system.format, disk.times_s.as_deref()) {
+            match read_estimate(trajectory, system.format, disk.times_s.as_deref()) {
                 Ok(t) if t.is_empty() => reason = Some("empty trajectory".into()),
                 Ok(t) => estimate = Some(t),
                 Err(e) => reason = Some(format!("unreadable trajectory: {e}")),
@@ -209,7 +260,7 @@ pub fn run_job(
         )?;
     }
     if let Some(r) = &reason {
-        let tail = process::tail(&stderr, 5);
+        let tail = process::tail(stderr, 5);
         ate_eval::io::write_atomic(
             &dir.join("failure.txt"),
             format!("{r}\n\nlast lines of stderr:\n{tail}\n").as_bytes(),
@@ -251,6 +302,160 @@ pub fn run_job(
         perturb_level,
         perturb_seed,
     })
+}
+
+/// What the runs of external systems on one sequence share.
+pub struct ExternalContext<'a> {
+    /// The sequence's source (a perturbed one: its folder in the cache).
+    pub source: &'a Source,
+    /// The sequence (perturbed).
+    pub seq: &'a datasets::Sequence,
+    /// Its frames.
+    pub frames: usize,
+    /// The catalog.
+    pub catalog: &'a Catalog,
+    /// How it was read.
+    pub opts: &'a LoadOptions,
+    /// Cache of sequences on disk.
+    pub cache: &'a Path,
+    /// The sweep's folder.
+    pub out: &'a Path,
+    /// The record of runs.
+    pub store: &'a RunStore,
+}
+
+/// Runs the jobs of external systems on one sequence in parallel, each recorded as it ends.
+/// Systems without a command for the sequence's sensor are skipped with a note.
+pub fn run_external_jobs(
+    jobs: &[&Job],
+    systems: &BTreeMap<String, SystemDef>,
+    cx: ExternalContext<'_>,
+    pool: &rayon::ThreadPool,
+    progress: &Progress,
+) -> Result<()> {
+    let sensor = cx.seq.camera.sensor;
+    let mut runnable: Vec<(&Job, Resolved)> = Vec::new();
+    let mut skipped = std::collections::BTreeSet::new();
+    for job in jobs {
+        let name = job.config.name();
+        match systems[name].resolve(name, sensor)? {
+            Some(r) => runnable.push((job, r)),
+            None => {
+                skipped.insert(name.to_string());
+            }
+        }
+    }
+    for name in skipped {
+        progress.note(&format!(
+            "note: system {name} has no {} command; not run on {}",
+            match sensor {
+                slam_core::SensorKind::Rgbd => "rgbd",
+                slam_core::SensorKind::Stereo => "stereo",
+            },
+            cx.source.label()
+        ));
+    }
+    if runnable.is_empty() {
+        return Ok(());
+    }
+    let disk = progress.multi.suspend(|| {
+        crate::external::export::prepare(
+            cx.source, cx.seq, cx.frames, cx.catalog, cx.opts, cx.cache,
+        )
+    })?;
+    let mut vocabularies = std::collections::BTreeMap::new();
+    for (_, r) in &runnable {
+        let v = match &r.vocabulary {
+            Some(v) => v.clone(),
+            None => crate::external::export::vocabulary_text(cx.cache)?,
+        };
+        vocabularies.insert(r.name.clone(), v);
+    }
+    let bar = progress.bar(runnable.len(), cx.source.label(), "external runs {msg}");
+    let results: Vec<Result<()>> = pool.install(|| {
+        runnable
+            .par_iter()
+            .map(|(job, system)| {
+                if !progress.reserve() {
+                    return Ok(());
+                }
+                let rec = run_job(
+                    system,
+                    &disk,
+                    &vocabularies[&system.name],
+                    cx.seq,
+                    job,
+                    cx.out,
+                )
+                .with_context(|| {
+                    format!("{} seed {} on {}", system.name, job.seed, job.sequence)
+                })?;
+                if let Some(r) = &rec.reason {
+                    bar.set_message(format!("({} seed {}: {r})", system.name, job.seed));
+                }
+                cx.store.append(&rec)?;
+                progress.done();
+                bar.inc(1);
+                Ok(())
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    results.into_iter().collect()
+}
+
+/// Writes a perturbed sequence once into the cache (TUM or EuRoC layout) for external systems,
+/// and returns its folder; another shard may have written it first.
+#[allow(clippy::too_many_arguments)]
+pub fn perturbed_folder(
+    cache: &Path,
+    src: &Source,
+    catalog: &Catalog,
+    opts: &LoadOptions,
+    seq: &datasets::Sequence,
+    frames: &datasets::FrameReader,
+    chain: &perturb::Chain,
+    seed: u64,
+    multi: &indicatif::MultiProgress,
+) -> Result<PathBuf> {
+    let realization = match src {
+        Source::Catalog(name) if catalog.get(name).is_ok_and(|e| e.preset.is_some()) => {
+            format!("-seed{}", opts.synth_seed)
+        }
+        _ => String::new(),
+    };
+    let folder = cache.join("sequences").join(format!(
+        "{}{realization}-{}f-{}-ps{seed}",
+        crate::file_name::safe(&src.label()),
+        frames.len(),
+        crate::file_name::safe(&chain.to_string())
+    ));
+    if !folder.is_dir() {
+        // A perturbed ground truth is written from memory, not copied from the source.
+        let source_dir = if chain.touches_groundtruth() {
+            None
+        } else {
+            crate::external::export::source_folder(src, catalog, opts)?
+        };
+        let note = format!(
+            "source {}\nperturbation {chain}\nperturbation_seed {seed}\nframes {}",
+            src.label(),
+            frames.len()
+        );
+        multi.suspend(|| {
+            eprintln!(
+                "writing {} perturbed by {chain} for external systems to {}",
+                src.label(),
+                folder.display()
+            )
+        });
+        let written =
+            perturb::write_folder(seq, frames, &folder, &note, source_dir.as_deref(), |_| {});
+        if !folder.is_dir() {
+            written.with_context(|| format!("writing {}", folder.display()))?;
+        }
+    }
+    Ok(folder)
 }
 
 /// `s` quoted for a POSIX shell when it needs it (for `command.txt`, to re-run by hand).

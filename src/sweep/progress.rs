@@ -1,0 +1,151 @@
+//! A sweep's progress: the overall bar (runs done of the sweep, elapsed time and an estimate of
+//! the time left), the per-phase bars under it, and the run budget of `--max-runs`.
+
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// The bars and counters every phase of a sweep reports to.
+pub struct Progress {
+    /// Where the bars are drawn (hidden with `--quiet`).
+    pub multi: MultiProgress,
+    overall: ProgressBar,
+    finished: AtomicUsize,
+    started: AtomicUsize,
+    max_runs: usize,
+    since: Instant,
+    /// Runs of the sweep (this shard) and how many were recorded before this invocation.
+    total: usize,
+    done_before: usize,
+    /// Whether to print a line per step for a log (stderr not a terminal, not quiet).
+    log_lines: bool,
+}
+
+impl Progress {
+    /// Progress over `total` runs of which `done` are already recorded; at most `max_runs`
+    /// start in this invocation.
+    pub fn new(total: usize, done: usize, max_runs: Option<usize>, quiet: bool) -> Progress {
+        let multi = MultiProgress::with_draw_target(if quiet {
+            ProgressDrawTarget::hidden()
+        } else {
+            ProgressDrawTarget::stderr()
+        });
+        let overall = multi.add(ProgressBar::new(total as u64));
+        overall.set_style(
+            ProgressStyle::with_template(
+                "{prefix:>12} [{bar:40}] {pos}/{len} runs, elapsed {elapsed}, eta {eta}",
+            )
+            .expect("static template")
+            .progress_chars("=> "),
+        );
+        overall.set_prefix("sweep");
+        overall.set_position(done as u64);
+        // The estimate of the time left counts this invocation's runs only.
+        overall.reset_eta();
+        Progress {
+            multi,
+            overall,
+            finished: AtomicUsize::new(0),
+            started: AtomicUsize::new(0),
+            max_runs: max_runs.unwrap_or(usize::MAX),
+            since: Instant::now(),
+            total,
+            done_before: done,
+            log_lines: !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        }
+    }
+
+    /// Where the sweep stands, for a log without bars (stderr redirected to a file): runs
+    /// recorded of the total, elapsed time and the time left at this invocation's pace. Nothing
+    /// on a terminal (the overall bar shows the same) or with `--quiet`.
+    pub fn log_step(&self, what: &str) {
+        if !self.log_lines {
+            return;
+        }
+        let finished = self.finished.load(Ordering::SeqCst);
+        let elapsed = self.since.elapsed().as_secs_f64();
+        let recorded = self.done_before + finished;
+        let left = self.total.saturating_sub(recorded);
+        let eta = if finished > 0 {
+            format!(
+                ", about {} left",
+                hms(elapsed / finished as f64 * left as f64)
+            )
+        } else {
+            String::new()
+        };
+        eprintln!(
+            "sweep: {what} done; {recorded}/{} runs recorded, {} elapsed{eta}",
+            self.total,
+            hms(elapsed)
+        );
+    }
+
+    /// A bar of `len` items under the overall one, labelled `prefix`, counting `what`.
+    pub fn bar(&self, len: usize, prefix: String, what: &str) -> ProgressBar {
+        let bar = self.multi.add(ProgressBar::new(len as u64));
+        bar.set_style(
+            ProgressStyle::with_template(&format!(
+                "{{prefix:>16}} [{{bar:40}}] {{pos}}/{{len}} {what}"
+            ))
+            .expect("static template")
+            .progress_chars("=> "),
+        );
+        bar.set_prefix(prefix);
+        bar
+    }
+
+    /// Whether another run may start (`--max-runs`); a slot is reserved first, so parallel
+    /// runs never overshoot the budget.
+    pub fn reserve(&self) -> bool {
+        self.started.fetch_add(1, Ordering::SeqCst) < self.max_runs
+    }
+
+    /// Whether the budget of runs is spent.
+    pub fn exhausted(&self) -> bool {
+        self.started.load(Ordering::SeqCst) >= self.max_runs
+    }
+
+    /// Counts one finished (recorded) run.
+    pub fn done(&self) {
+        self.finished.fetch_add(1, Ordering::SeqCst);
+        self.overall.inc(1);
+    }
+
+    /// A line printed above the bars (also when stderr is not a terminal).
+    pub fn note(&self, line: &str) {
+        self.multi.suspend(|| eprintln!("{line}"));
+    }
+
+    /// Clears the bars; returns the runs finished and the seconds since the start.
+    pub fn finish(&self) -> (usize, f64) {
+        self.overall.finish_and_clear();
+        (
+            self.finished.load(Ordering::SeqCst),
+            self.since.elapsed().as_secs_f64(),
+        )
+    }
+}
+
+/// Seconds as `1h02m03s` / `2m03s` / `3s`.
+fn hms(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    match (s / 3600, s / 60 % 60, s % 60) {
+        (0, 0, sec) => format!("{sec}s"),
+        (0, m, sec) => format!("{m}m{sec:02}s"),
+        (h, m, sec) => format!("{h}h{m:02}m{sec:02}s"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_print_in_hours_minutes_and_seconds() {
+        assert_eq!(hms(0.4), "0s");
+        assert_eq!(hms(59.6), "1m00s");
+        assert_eq!(hms(125.0), "2m05s");
+        assert_eq!(hms(3723.0), "1h02m03s");
+    }
+}
