@@ -24,6 +24,7 @@
 //! Every output is on the depth PNG grid (`units` per metre); holes (0) stay holes.
 
 use slam_core::{Camera, DepthImage};
+use std::sync::{Arc, Mutex, OnceLock};
 use synth::hash::{NoiseKey, Stream};
 use synth::sensor::depth::quantise_png;
 
@@ -36,6 +37,19 @@ pub const KINECT_FB: f64 = 43.5;
 
 /// The Kinect v1's disparity resolution, pixels (1/8 px).
 pub const KINECT_DISPARITY_STEP: f64 = 0.125;
+
+/// The noise stream a shared field is drawn from: depth-distortion's (range) or
+/// depth-registration's (lateral).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldStream {
+    /// `depth-distortion`.
+    Range,
+    /// `depth-registration`.
+    Lateral,
+}
+
+/// Fields [`SmoothField::shared`] keeps (a sweep's chains hold a few systematic members).
+pub const FIELD_CACHE: usize = 16;
 
 /// A smooth field over a `w x h` image with values in [-1, 1] reaching +-1: a sum of six
 /// separable cosines with periods between one and four image sizes, drawn from `key`.
@@ -82,6 +96,40 @@ impl SmoothField {
         field
     }
 
+    /// The field of `key` for a `w x h` image, built once per process and shared: a
+    /// systematic error's field is the same in every frame of a sequence (its member seed does
+    /// not change from frame to frame), and building it costs a pass over the image. The last
+    /// [`FIELD_CACHE`] fields are kept.
+    pub fn shared(seed: u64, stream: FieldStream, w: usize, h: usize) -> Arc<SmoothField> {
+        type Cache = Mutex<Vec<((u64, FieldStream, usize, usize), Arc<SmoothField>)>>;
+        static CACHE: OnceLock<Cache> = OnceLock::new();
+        let cache = CACHE.get_or_init(Mutex::default);
+        let id = (seed, stream, w, h);
+        if let Some(f) = cache
+            .lock()
+            .ok()
+            .and_then(|c| c.iter().find(|(k, _)| *k == id).map(|(_, f)| f.clone()))
+        {
+            return f;
+        }
+        let key = NoiseKey::new(
+            seed,
+            0,
+            match stream {
+                FieldStream::Range => Stream::Range,
+                FieldStream::Lateral => Stream::Lateral,
+            },
+        );
+        let field = Arc::new(SmoothField::new(key, w, h));
+        if let Ok(mut c) = cache.lock() {
+            if c.len() >= FIELD_CACHE {
+                c.remove(0);
+            }
+            c.push((id, field.clone()));
+        }
+        field
+    }
+
     /// The field at pixel (u, v).
     #[inline]
     pub fn at(&self, u: usize, v: usize) -> f64 {
@@ -93,7 +141,7 @@ impl SmoothField {
 /// `depth-distortion` at `level` percent at 3 m, field drawn from member seed `seed`.
 pub fn depth_distortion(depth: &DepthImage, level: f64, units: f64, seed: u64) -> DepthImage {
     let (w, h) = (depth.width, depth.height);
-    let field = SmoothField::new(NoiseKey::new(seed, 0, Stream::Range), w, h);
+    let field = SmoothField::shared(seed, FieldStream::Range, w, h);
     let k = level / 100.0 / 3.0;
     map_valid(depth, |i, z| {
         quantise_png(z * (1.0 + k * z * field.at(i % w, i / w)), units)
@@ -117,7 +165,7 @@ fn map_valid(depth: &DepthImage, f: impl Fn(usize, f64) -> f32) -> DepthImage {
 /// The displacement (pixels) of `depth-registration` at `level` at pixel (u, v), for the
 /// field and base direction of member seed `seed` (see [`depth_registration`]).
 pub struct RegistrationWarp {
-    field: SmoothField,
+    field: Arc<SmoothField>,
     base: f64,
     level: f64,
 }
@@ -125,9 +173,8 @@ pub struct RegistrationWarp {
 impl RegistrationWarp {
     /// The warp of `level` pixels for a `w x h` image and member seed `seed`.
     pub fn new(level: f64, seed: u64, w: usize, h: usize) -> RegistrationWarp {
-        let key = NoiseKey::new(seed, 0, Stream::Lateral);
         RegistrationWarp {
-            field: SmoothField::new(key, w, h),
+            field: SmoothField::shared(seed, FieldStream::Lateral, w, h),
             base: NoiseKey::new(seed, 1, Stream::Lateral).uniform(0) * std::f64::consts::TAU,
             level,
         }
@@ -249,5 +296,23 @@ mod tests {
         // Periods of at least an image width: a pixel moves it by at most 6 x 1.5 x 2 pi / 640
         // before normalisation.
         assert!(step < 0.2, "{step}");
+    }
+}
+
+#[cfg(test)]
+mod shared_field_tests {
+    use super::*;
+
+    #[test]
+    fn a_shared_field_is_the_field_built_afresh() {
+        let fresh = SmoothField::new(NoiseKey::new(9, 0, Stream::Lateral), 64, 48);
+        let a = SmoothField::shared(9, FieldStream::Lateral, 64, 48);
+        let b = SmoothField::shared(9, FieldStream::Lateral, 64, 48);
+        assert!(Arc::ptr_eq(&a, &b), "built once");
+        let other = SmoothField::shared(9, FieldStream::Range, 64, 48);
+        for (u, v) in [(0, 0), (13, 7), (63, 47)] {
+            assert_eq!(a.at(u, v).to_bits(), fresh.at(u, v).to_bits());
+        }
+        assert_ne!(other.at(13, 7), a.at(13, 7));
     }
 }
