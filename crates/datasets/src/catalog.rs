@@ -445,6 +445,30 @@ mod tests {
         assert_eq!(c.get("rgbd_dataset_freiburg1_xyz").unwrap().name, "fr1_xyz");
     }
 
+    /// Every synth twin has an entry naming it as its preset, with the real sequence the twin
+    /// imitates (when that is catalogued) and the twin's frame count; and every entry naming a
+    /// twin's preset is that twin's.
+    #[test]
+    fn embedded_catalog_lists_every_twin_as_synth_defines_it() {
+        let c = Catalog::embedded();
+        for preset in synth::Preset::all() {
+            let Some(t) = preset.twin() else { continue };
+            let e = c.get(t.name).unwrap_or_else(|e| panic!("{}: {e}", t.name));
+            assert_eq!(e.format, EntryFormat::Synthetic, "{}", t.name);
+            assert_eq!(e.preset.as_deref(), Some(t.name), "{}", t.name);
+            assert_eq!(e.frames, Some(preset.default_frames()), "{}", t.name);
+            let catalogued = c.get(t.imitates).is_ok_and(|r| !r.is_synthetic());
+            let expected = catalogued.then_some(t.imitates);
+            assert_eq!(e.imitates.as_deref(), expected, "{}", t.name);
+        }
+        for e in c.by_format(EntryFormat::Synthetic) {
+            if let Some(p) = e.preset.as_deref().filter(|p| p.starts_with("twin_")) {
+                let preset = synth::Preset::from_name(p).unwrap();
+                assert!(preset.twin().is_some() && p == e.name, "{}", e.name);
+            }
+        }
+    }
+
     #[test]
     fn unknown_name_suggests_closest() {
         let c = Catalog::embedded();

@@ -53,6 +53,11 @@ pub struct Orbit {
     pub start_rad: f64,
     /// Turns per second of path time, before time scaling.
     pub rate: f64,
+    /// Whether the target box turns with the walk about the eye box's centre (the walker
+    /// looks outwards, at the walls beyond: fr1_room), rather than staying put (looking
+    /// inwards at what the walk circles: fr3_long_office_household). The target box is then
+    /// given as seen from the walk's start.
+    pub carry_target: bool,
 }
 
 /// How much faster the camera moves from frame to frame than its smooth path: the shake's
@@ -105,6 +110,13 @@ pub struct MotionSpec {
     pub tremor: Tremor,
     /// Frame-to-frame shake to reach by scaling the tremor, if any.
     pub shake: Option<Shake>,
+    /// How the mean speeds are measured when solving ([`HandHeldPath::smooth_speeds`]):
+    /// `None`, along the smooth path, between samples at [`STATS_RATE`]; `Some(w)`, from the
+    /// displacement and rotation between poses `w` seconds apart, divided by `w`. TUM's
+    /// statistics script computes its page's figures with `w` = 1 s, which falls below the
+    /// speed along the path where the path turns back within a second (fast hand-held
+    /// sweeps, rotation on the spot).
+    pub speed_window_s: Option<f64>,
     /// Seed of the path's own random phases and frequencies.
     pub seed: u64,
 }
@@ -313,6 +325,8 @@ impl HandHeldPath {
             let a = o.start_rad + TAU * o.rate * u;
             [o.semi_axes[0] * a.cos(), o.semi_axes[1] * a.sin(), 0.0]
         });
+        // The angle walked round the orbit, when the target turns with it.
+        let carried = s.orbit.filter(|o| o.carry_target).map(|o| TAU * o.rate * u);
         let eye = Vector3::from_fn(|i, _| {
             s.eye.centre[i]
                 + orbit[i]
@@ -330,7 +344,12 @@ impl HandHeldPath {
         } else {
             Vector3::from(s.eye.centre)
         };
-        let target = from + spin * (centre + target_offset - from);
+        let mut aim = centre + target_offset;
+        if let Some(angle) = carried {
+            let c = Vector3::from(s.eye.centre);
+            aim = c + Rotation3::from_axis_angle(&Vector3::z_axis(), angle) * (aim - c);
+        }
+        let target = from + spin * (aim - from);
         let base = look_at(&from, &target);
         let roll = k * s.roll_rad * sum(&self.roll, u);
         let ta = on * self.tremor_scale[1] * s.tremor.angle_rad;
@@ -346,9 +365,31 @@ impl HandHeldPath {
     }
 
     /// Mean translational (m/s) and angular (rad/s) speed of the smooth path (no tremor) over
-    /// the duration, from poses at [`STATS_RATE`]: what the benchmark publishes.
+    /// the duration, as the spec's [`MotionSpec::speed_window_s`] measures them (by default
+    /// from poses at [`STATS_RATE`]): what the benchmark publishes.
     pub fn smooth_speeds(&self) -> (f64, f64) {
-        self.speeds(STATS_RATE, false)
+        match self.spec.speed_window_s {
+            None => self.speeds(STATS_RATE, false),
+            Some(w) => self.windowed_speeds(w),
+        }
+    }
+
+    /// Mean translational and angular speed of the smooth path between poses `window` seconds
+    /// apart, the first of each pair every 1 / [`STATS_RATE`] s from the start.
+    fn windowed_speeds(&self, window: f64) -> (f64, f64) {
+        let pairs = ((self.spec.duration_s - window) * STATS_RATE).floor();
+        if !(pairs >= 1.0 && window > 0.0) {
+            return (0.0, 0.0);
+        }
+        let n = pairs as usize;
+        let (mut lin, mut ang) = (0.0, 0.0);
+        for i in 0..n {
+            let t = i as f64 / STATS_RATE;
+            let d = self.pose_with(t, false).inverse() * self.pose_with(t + window, false);
+            lin += d.translation.vector.norm();
+            ang += d.rotation.angle();
+        }
+        (lin / (n as f64 * window), ang / (n as f64 * window))
     }
 
     /// Mean translational and angular speed between frames at `rate_hz`, tremor included.
@@ -418,6 +459,7 @@ mod tests {
                 angle_rad: 0.002,
             },
             shake: None,
+            speed_window_s: None,
             seed: 7,
         }
     }
@@ -444,6 +486,21 @@ mod tests {
     }
 
     #[test]
+    fn a_speed_window_solves_for_the_figures_over_it() {
+        let windowed = HandHeldPath::new(MotionSpec {
+            speed_window_s: Some(1.0),
+            ..spec()
+        });
+        let (v, w) = windowed.smooth_speeds();
+        assert!((v - 0.25).abs() < 0.0025, "{v}");
+        assert!((w - 0.3).abs() < 0.003, "{w}");
+        // Chords of a second are shorter than the path along them: the windowed path moves
+        // faster along itself than the default one.
+        let (av, aw) = windowed.speeds(STATS_RATE, false);
+        assert!(av > 0.25 && aw > 0.3, "{av} {aw}");
+    }
+
+    #[test]
     fn eye_stays_in_its_box_plus_tremor() {
         let s = spec();
         let p = HandHeldPath::new(s.clone());
@@ -453,6 +510,53 @@ mod tests {
                 assert!((e[i] - s.eye.centre[i]).abs() <= slack, "{e:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_carried_target_looks_outwards_round_the_orbit() {
+        let mut s = spec();
+        s.orbit = Some(Orbit {
+            semi_axes: [1.0, 1.0],
+            start_rad: -std::f64::consts::FRAC_PI_2,
+            rate: 0.05,
+            carry_target: true,
+        });
+        // Beyond the eye at the start, as seen from the orbit's centre.
+        s.target = Region {
+            centre: [0.0, -4.0, 1.2],
+            half: [0.3, 0.1, 0.1],
+        };
+        s.roll_rad = 0.0;
+        let p = HandHeldPath::new(s.clone());
+        let centre = Vector3::from(s.eye.centre);
+        let mut dots = Vec::new();
+        for i in 0..40 {
+            let pose = p.pose_at(i as f64 * 0.5);
+            let out = pose.translation.vector - centre;
+            let axis = pose.rotation * Vector3::z();
+            let (o, a) = (out.xy().normalize(), axis.xy().normalize());
+            dots.push(o.dot(&a));
+        }
+        // The optical axis points away from the orbit's centre all the way round (swaying
+        // by up to 60 degrees to reach the asked angular speed).
+        let mean = dots.iter().sum::<f64>() / dots.len() as f64;
+        assert!(mean > 0.6 && dots.iter().all(|&d| d > 0.3), "{dots:?}");
+        // Not carried, the same target is looked at from everywhere: inwards half the time.
+        let fixed = HandHeldPath::new(MotionSpec {
+            orbit: s.orbit.map(|o| Orbit {
+                carry_target: false,
+                ..o
+            }),
+            ..s
+        });
+        let inwards = (0..40)
+            .map(|i| fixed.pose_at(i as f64 * 0.5))
+            .filter(|q| {
+                let out = q.translation.vector - centre;
+                (q.rotation * Vector3::z()).xy().dot(&out.xy()) < 0.0
+            })
+            .count();
+        assert!(inwards > 5, "{inwards}");
     }
 
     #[test]

@@ -11,6 +11,11 @@
 //!
 //! The layout draws from its own `ChaCha8Rng` (seed ^ a salt), so the textures, which the
 //! scene draws from another, are those of the fixed layout wherever the two share an object.
+//!
+//! An office may also have a [`Centrepiece`]: an object a twin's camera circles (fr1_plant's
+//! potted plant, fr1_teddy's teddy bear), composed of boxes and cylinders and standing on the
+//! floor in front of the desk ([`CENTREPIECE_AT`]); it is appended after the furniture and
+//! draws nothing from the layout's generator, so a layout without one is unchanged.
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
@@ -48,6 +53,99 @@ pub struct SceneSpec {
     /// lies on the desk), kept off the camera's lines of sight. Off: the office's fixed
     /// furniture, or the other rooms' layout of seed 0.
     pub seeded_layout: bool,
+    /// An object standing at [`CENTREPIECE_AT`] for the camera to circle (offices only), or
+    /// none (default).
+    pub centrepiece: Option<Centrepiece>,
+}
+
+/// An object a twin's camera circles at close range, composed of boxes and vertical cylinders
+/// (the renderer's only shapes) and textured like the real thing's surfaces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Centrepiece {
+    /// A potted plant about 1.1 m tall (fr1_plant): a pot, a stem and 14 leaves as thin
+    /// horizontal boxes at several yaws and heights, spiralling up the stem.
+    Plant,
+    /// A teddy bear about 0.5 m tall sitting on a low stool (fr1_teddy): body, head, snout,
+    /// ears, arms and legs.
+    Teddy,
+}
+
+/// Where a [`Centrepiece`] stands: on the floor in the open part of the office, 1.3 m in front
+/// of the desk's near edge (x, y, metres), over 1.1 m from the fixed office's other furniture,
+/// so that a camera can circle it at about a metre.
+pub const CENTREPIECE_AT: [f64; 2] = [0.2, -0.75];
+
+/// Footprint radius kept free of other furniture round a centrepiece, metres.
+pub const CENTREPIECE_RADIUS: f64 = 0.4;
+
+impl Centrepiece {
+    /// Its parts, standing at [`CENTREPIECE_AT`] on the floor.
+    pub fn parts(&self) -> Vec<Furnishing> {
+        let [x, y] = CENTREPIECE_AT;
+        match self {
+            Centrepiece::Plant => {
+                let mut parts = vec![
+                    // A terracotta-like pot, a rim of soil, a stem.
+                    cylinder(x, y, 0.0, 0.17, 0.34, Style::Poster),
+                    cylinder(x, y, 0.34, 0.19, 0.04, Style::Poster),
+                    cylinder(x, y, 0.38, 0.02, 0.7, Style::Foliage),
+                ];
+                // Leaves spiralling up the stem at the golden angle, longer low down.
+                for k in 0..14 {
+                    let yaw = k as f64 * 2.39996;
+                    let len = 0.17 - 0.006 * k as f64;
+                    let (c, s) = (yaw.cos(), yaw.sin());
+                    let r = 0.02 + len;
+                    parts.push(cuboid(
+                        [x + r * c, y + r * s, 0.5 + 0.042 * k as f64],
+                        [len, 0.045 + 0.01 * (k % 3) as f64, 0.006],
+                        yaw,
+                        Style::Foliage,
+                    ));
+                }
+                parts
+            }
+            Centrepiece::Teddy => {
+                // Facing -y (towards where the twins' paths start); local x forward, y left.
+                let facing = -std::f64::consts::FRAC_PI_2;
+                let (c, s) = (facing.cos(), facing.sin());
+                let at = |fwd: f64, left: f64, z: f64| {
+                    [x + c * fwd - s * left, y + s * fwd + c * left, z]
+                };
+                let fur = Style::Fur;
+                let seat = 0.4;
+                let mut parts = vec![
+                    cuboid(
+                        [x, y, seat / 2.0],
+                        [0.22, 0.22, seat / 2.0],
+                        0.3,
+                        Style::Poster,
+                    ),
+                    // Body and head.
+                    cylinder(x, y, seat, 0.13, 0.28, fur),
+                    cylinder(x, y, seat + 0.28, 0.1, 0.17, fur),
+                ];
+                let part = |fwd: f64, left: f64, z: f64, half: [f64; 3]| {
+                    cuboid(at(fwd, left, z), half, facing, fur)
+                };
+                parts.extend([
+                    // Snout.
+                    part(0.11, 0.0, seat + 0.34, [0.035, 0.045, 0.035]),
+                    // Arms.
+                    part(0.03, 0.16, seat + 0.15, [0.045, 0.04, 0.1]),
+                    part(0.03, -0.16, seat + 0.15, [0.045, 0.04, 0.1]),
+                    // Legs, stretched forward.
+                    part(0.15, 0.07, seat + 0.045, [0.1, 0.05, 0.045]),
+                    part(0.15, -0.07, seat + 0.045, [0.1, 0.05, 0.045]),
+                ]);
+                for left in [0.075, -0.075] {
+                    let [ex, ey, _] = at(0.0, left, 0.0);
+                    parts.push(cylinder(ex, ey, seat + 0.45, 0.035, 0.035, fur));
+                }
+                parts
+            }
+        }
+    }
 }
 
 /// The room's box: x in `[-half[0], half[0]]`, y in `[-half[1], half[1]]`, z in `[0, height]`.
@@ -119,15 +217,21 @@ impl SightLine {
 
 /// The layout of `spec` for sequence `seed`. `sight` are the camera's lines of sight (used by
 /// seeded layouts only); `people` says whether the scene has the people's chairs (kept clear).
+/// An office's centrepiece (see [`SceneSpec::centrepiece`]) comes last among its objects.
 pub fn layout(spec: &SceneSpec, seed: u64, sight: &[SightLine], people: bool) -> Layout {
     let layout_seed = if spec.seeded_layout { seed } else { 0 };
     let mut rng = ChaCha8Rng::seed_from_u64(layout_seed ^ 0x1A40_u64.rotate_left(48) ^ 0x0FF1CE);
-    match (spec.room, spec.seeded_layout) {
+    let centrepiece = spec.centrepiece.filter(|_| spec.room == Room::Office);
+    let mut l = match (spec.room, spec.seeded_layout) {
         (Room::Office, false) => fixed_office(people),
-        (Room::Office, true) => seeded_office(&mut rng, sight, people),
+        (Room::Office, true) => seeded_office(&mut rng, sight, people, centrepiece.is_some()),
         (Room::ViconRoom, _) => vicon_room(&mut rng, sight),
         (Room::MachineHall, _) => machine_hall(&mut rng, sight),
+    };
+    if let Some(c) = centrepiece {
+        l.objects.extend(c.parts());
     }
+    l
 }
 
 fn cuboid(centre: [f64; 3], half: [f64; 3], yaw: f64, style: Style) -> Furnishing {
@@ -359,8 +463,14 @@ fn draw(rng: &mut ChaCha8Rng, r: (f64, f64)) -> f64 {
 }
 
 /// An office of 5-7 x 5-7 m: the desk where the twins look, 5-9 things on it, 6-11 pieces of
-/// furniture around (most against the walls).
-fn seeded_office(rng: &mut ChaCha8Rng, sight: &[SightLine], people: bool) -> Layout {
+/// furniture around (most against the walls), none within [`CENTREPIECE_RADIUS`] of
+/// [`CENTREPIECE_AT`] when the office has a centrepiece.
+fn seeded_office(
+    rng: &mut ChaCha8Rng,
+    sight: &[SightLine],
+    people: bool,
+    centrepiece: bool,
+) -> Layout {
     let room = RoomBox {
         half: [rng.random_range(2.5..3.5), rng.random_range(2.5..3.5)],
         height: rng.random_range(2.6..3.0),
@@ -432,6 +542,10 @@ fn seeded_office(rng: &mut ChaCha8Rng, sight: &[SightLine], people: bool) -> Lay
         for c in CHAIRS.iter() {
             place.taken.push((c.at[0], c.at[1], 0.8));
         }
+    }
+    if centrepiece {
+        let [x, y] = CENTREPIECE_AT;
+        place.taken.push((x, y, CENTREPIECE_RADIUS));
     }
     let n = rng.random_range(6..=11);
     for _ in 0..n {
@@ -722,6 +836,7 @@ mod tests {
         SceneSpec {
             room,
             seeded_layout: true,
+            centrepiece: None,
         }
     }
 
@@ -758,6 +873,7 @@ mod tests {
             let spec = SceneSpec {
                 room,
                 seeded_layout: false,
+                centrepiece: None,
             };
             assert_eq!(
                 format!("{:?}", layout(&spec, 1, &[], false).objects),
@@ -835,6 +951,58 @@ mod tests {
                     }
                 }
                 assert!(floor_things >= 3, "{room:?} {seed}: {floor_things}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_centrepiece_stands_on_the_floor_with_room_round_it() {
+        for piece in [Centrepiece::Plant, Centrepiece::Teddy] {
+            let parts = piece.parts();
+            let [x, y] = CENTREPIECE_AT;
+            let (mut bottom, mut height) = (f64::INFINITY, 0.0f64);
+            for p in &parts {
+                let t = top(&p.shape, p.centre[2]);
+                bottom = bottom.min(2.0 * p.centre[2] - t);
+                height = height.max(t);
+                let d = (p.centre[0] - x).hypot(p.centre[1] - y) + footprint(&p.shape);
+                assert!(
+                    d <= CENTREPIECE_RADIUS,
+                    "{piece:?}: {p:?} reaches {d} m out"
+                );
+            }
+            assert!(bottom.abs() < 1e-9, "{piece:?} floats at {bottom}");
+            assert!((0.8..1.2).contains(&height), "{piece:?}: {height} m tall");
+            for seed in 0..10 {
+                let spec = SceneSpec {
+                    centrepiece: Some(piece),
+                    ..seeded(Room::Office)
+                };
+                let l = layout(&spec, seed, &[], false);
+                let plain = layout(&seeded(Room::Office), seed, &[], false);
+                // Appended last; the furniture before it keeps its distance.
+                let n = l.objects.len() - parts.len();
+                assert_eq!(format!("{:?}", &l.objects[n..]), format!("{parts:?}"));
+                for o in &l.objects[5..n] {
+                    if on_the_desk(o) {
+                        continue;
+                    }
+                    let d = (o.centre[0] - x).hypot(o.centre[1] - y);
+                    assert!(d >= CENTREPIECE_RADIUS + footprint(&o.shape), "{o:?}");
+                }
+                // Other rooms and offices without one are unchanged by the option.
+                assert_eq!(l.room, plain.room);
+                let hall = SceneSpec {
+                    centrepiece: Some(piece),
+                    ..seeded(Room::MachineHall)
+                };
+                assert_eq!(
+                    format!("{:?}", layout(&hall, seed, &[], false).objects),
+                    format!(
+                        "{:?}",
+                        layout(&seeded(Room::MachineHall), seed, &[], false).objects
+                    )
+                );
             }
         }
     }

@@ -44,6 +44,12 @@ pub enum Style {
     Concrete,
     /// Machinery: a painted body in panels with labels, vents and bolts.
     Machine,
+    /// Leaves and stems of a house plant: patches of dark and light green with paler veins
+    /// and a few brown or yellow spots.
+    Foliage,
+    /// The plush of a teddy bear: a brown or golden pile of small shaded tufts with darker
+    /// flecks and a few stitched patches.
+    Fur,
 }
 
 /// An RGB texture covering `width_m` x `height_m` metres of a surface.
@@ -297,6 +303,56 @@ impl Texture {
                     0.3,
                     texel_m,
                 );
+            }
+            Style::Foliage => {
+                let mut tiles = Vec::new();
+                split_tiles(rng, 0.0, 0.0, wm, hm, 0.02, 0.08, &mut |_, x, y, w, h| {
+                    tiles.push((x, y, w, h))
+                });
+                for (x, y, w, h) in tiles {
+                    let g: f64 = rng.random_range(50.0..190.0);
+                    let c = [(g * 0.45) as u8, g as u8, (g * 0.3) as u8];
+                    t.fill_rect(x, y, x + w, y + h, c);
+                }
+                // Veins: pale lines across, then spots.
+                let mut y = rng.random_range(0.0..0.03);
+                while y < hm {
+                    let l: f64 = rng.random_range(170.0..230.0);
+                    let c = [(l * 0.75) as u8, l as u8, (l * 0.5) as u8];
+                    t.fill_rect(0.0, y, wm, y + 0.003, c);
+                    y += rng.random_range(0.015..0.04);
+                }
+                let spots = (wm * hm / 0.004).ceil() as usize;
+                for _ in 0..spots {
+                    let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
+                    let c = if rng.random_bool(0.5) {
+                        [110, 80, 40]
+                    } else {
+                        [210, 200, 90]
+                    };
+                    t.fill_disc(cx, cy, rng.random_range(0.002..0.006), c);
+                }
+            }
+            Style::Fur => {
+                let l: f64 = rng.random_range(90.0..170.0);
+                let mut tiles = Vec::new();
+                split_tiles(rng, 0.0, 0.0, wm, hm, 0.008, 0.03, &mut |_, x, y, w, h| {
+                    tiles.push((x, y, w, h))
+                });
+                for (x, y, w, h) in tiles {
+                    let k = l + rng.random_range(-30.0..30.0);
+                    let c = [(k * 1.1).min(255.0) as u8, (k * 0.8) as u8, (k * 0.5) as u8];
+                    t.fill_rect(x, y, x + w, y + h, c);
+                }
+                let flecks = (wm * hm / 0.0015).ceil() as usize;
+                for _ in 0..flecks {
+                    let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
+                    let k = l * rng.random_range(0.3..0.6);
+                    let c = [(k * 1.1) as u8, (k * 0.8) as u8, (k * 0.5) as u8];
+                    t.fill_disc(cx, cy, rng.random_range(0.002..0.005), c);
+                }
+                // Stitched patches (paws, a tummy), seams in dark thread.
+                t.scatter(rng, wm, hm, &[(0.05, 0.05)], 0.0, texel_m);
             }
         }
         t
