@@ -113,8 +113,9 @@ impl View<'_> {
     }
 
     /// Casts the ray of camera-frame direction `dc` (world direction `d`, `None` when the
-    /// occluder covers the lens) and shades it when `shade`.
-    #[inline]
+    /// occluder covers the lens) and shades it when `shade`. Inlined into each caller, so a
+    /// caller that keeps only the colour (or only the geometry) does not pay for the rest.
+    #[inline(always)]
     fn cast(
         &self,
         seen: &[Seen],
@@ -211,21 +212,32 @@ impl View<'_> {
 
     /// The placed objects as the view's rays meet them ([`Scene::seen_from`]).
     fn seen(&self) -> Vec<Seen> {
-        let o = self.pose_wc.translation.vector;
-        self.placed
-            .iter()
-            .map(|p| self.scene.seen_from(p, &o))
-            .collect()
+        let mut out = Vec::new();
+        self.seen_into(&mut out);
+        out
     }
 
-    /// Casts `n` rays at (x0 + k, y), k = 0..n, and hands each sample to `emit(k, sample)` in
-    /// order, testing per 16-ray segment only the objects whose image bounds overlap it and
+    /// [`View::seen`] into `out` (cleared first).
+    fn seen_into(&self, out: &mut Vec<Seen>) {
+        let o = self.pose_wc.translation.vector;
+        out.clear();
+        out.extend(self.placed.iter().map(|p| self.scene.seen_from(p, &o)));
+    }
+
+    /// The ray table of the view's camera when it has a lens distortion ([`ray_table`]).
+    fn rays(&self) -> Option<std::sync::Arc<RayTable>> {
+        self.camera.distortion.map(|_| ray_table(self.camera))
+    }
+
+    /// Casts `n` rays at (x0 + k, y), k = 0..n (through `rays`, [`View::rays`]), and hands
+    /// each sample to `emit(k, sample)` in order, testing per 16-ray segment only the objects whose image bounds overlap it and
     /// whose bounding sphere the segment's cone of rays reaches ([`RayCone`]): the objects
     /// left out are those every ray of the segment misses by a wide margin, so each ray finds
     /// the hit it would find testing every object. `seen` is [`View::seen`].
     #[allow(clippy::too_many_arguments)]
     fn row(
         &self,
+        rays: Option<&RayTable>,
         seen: &[Seen],
         bounds: &[[f64; 4]],
         x0: f64,
@@ -238,8 +250,6 @@ impl View<'_> {
         let row_objs: Vec<usize> = (0..bounds.len())
             .filter(|&i| bounds[i][2] <= y && y <= bounds[i][3])
             .collect();
-        let rays = self.camera.distortion.map(|_| ray_table(self.camera));
-        let rays = rays.as_deref();
         let mut seg: Vec<Seen> = Vec::with_capacity(row_objs.len());
         let mut dirs = [(Vector3::zeros(), Vector3::zeros()); SEG];
         for s in (0..n).step_by(SEG) {
@@ -263,7 +273,9 @@ impl View<'_> {
                 if !(b[0] <= xb && xa <= b[1]) {
                     continue;
                 }
-                let cone = cone.get_or_insert_with(|| RayCone::of(dirs.iter().map(|(_, d)| d)));
+                let cone = cone.get_or_insert_with(|| {
+                    RayCone::of_camera(dirs.iter().map(|(dc, _)| dc), &self.pose_wc.rotation)
+                });
                 if cone.may_reach(&seen[i]) {
                     seg.push(seen[i]);
                 }
@@ -282,6 +294,8 @@ impl View<'_> {
         let b = &bounds;
         let seen = self.seen();
         let seen = &seen;
+        let rays = self.rays();
+        let rays = rays.as_deref();
         // Pixel-centre rays: depth, incidence, id, and the centre colour sample.
         let mut depth = vec![0.0f32; w * h];
         let mut cos_incidence = vec![0.0f32; w * h];
@@ -299,7 +313,7 @@ impl View<'_> {
             .zip(colour_rows)
             .enumerate()
             .for_each(|(v, (((dr, cr), ir), colr))| {
-                self.row(seen, b, 0.0, v as f64, w, sh, |k, s| {
+                self.row(rays, seen, b, 0.0, v as f64, w, sh, |k, s| {
                     dr[k] = s.t;
                     cr[k] = s.cos;
                     ir[k] = s.id;
@@ -316,7 +330,7 @@ impl View<'_> {
                     .par_chunks_mut(w + 1)
                     .enumerate()
                     .for_each(|(v, row)| {
-                        self.row(seen, b, -0.5, v as f64 - 0.5, w + 1, sh, |k, s| {
+                        self.row(rays, seen, b, -0.5, v as f64 - 0.5, w + 1, sh, |k, s| {
                             row[k] = s.colour
                         });
                     });
@@ -341,7 +355,7 @@ impl View<'_> {
                 out.par_chunks_mut(w).enumerate().for_each(|(v, acc)| {
                     for j in 0..n {
                         for i in 0..n {
-                            self.row(seen, b, off(i), v as f64 + off(j), w, sh, |k, s| {
+                            self.row(rays, seen, b, off(i), v as f64 + off(j), w, sh, |k, s| {
                                 for (ak, ck) in acc[k].iter_mut().zip(s.colour) {
                                     *ak += ck;
                                 }
@@ -379,17 +393,41 @@ struct RayCone {
 const CONE_MARGIN: f64 = 1e-7;
 
 impl RayCone {
-    /// The cone around the mean direction of `dirs` (not zero) holding them all.
-    fn of<'a>(dirs: impl Iterator<Item = &'a Vector3<f64>> + Clone) -> RayCone {
-        let mut sum = Vector3::zeros();
-        for d in dirs.clone() {
-            sum += d / d.norm();
+    /// A cone holding the world directions `rotation * dc` of camera-frame directions `dc`
+    /// (z = 1; not empty): the cone around the centre of their (x, y) bounding box holding its
+    /// four corners, turned into the world. The box is convex and a cone of half-angle under
+    /// 90 degrees is convex, so holding the corners it holds every ray inside the box; the
+    /// rotation keeps angles to about 1e-16, far inside [`CONE_MARGIN`]. Five square roots per
+    /// segment (the cone of the rays themselves took two per ray).
+    fn of_camera<'a>(
+        dcs: impl Iterator<Item = &'a Vector3<f64>>,
+        rotation: &nalgebra::UnitQuaternion<f64>,
+    ) -> RayCone {
+        let mut b = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for d in dcs {
+            b[0] = b[0].min(d.x);
+            b[1] = b[1].max(d.x);
+            b[2] = b[2].min(d.y);
+            b[3] = b[3].max(d.y);
         }
-        let axis = sum / sum.norm();
-        let cos = dirs.map(|d| axis.dot(d) / d.norm()).fold(1.0f64, f64::min) - CONE_MARGIN;
+        let centre = Vector3::new(0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 1.0);
+        let axis = centre / centre.norm();
+        let cos = [(b[0], b[2]), (b[0], b[3]), (b[1], b[2]), (b[1], b[3])]
+            .iter()
+            .map(|&(x, y)| {
+                let c = Vector3::new(x, y, 1.0);
+                axis.dot(&c) / c.norm()
+            })
+            .fold(1.0f64, f64::min)
+            - CONE_MARGIN;
         let cos = cos.max(-1.0);
         RayCone {
-            axis,
+            axis: rotation * axis,
             cos,
             sin: (1.0 - cos * cos).max(0.0).sqrt(),
         }
@@ -468,8 +506,8 @@ impl RayTable {
     #[inline]
     pub fn ray(&self, camera: &Camera, u: f64, v: f64) -> (f64, f64) {
         let _ = camera;
-        let iu = ((u + 0.5).floor().max(0.0) as usize).min(self.width - 1);
-        let iv = ((v + 0.5).floor().max(0.0) as usize).min(self.height - 1);
+        let iu = floor_index(u + 0.5).min(self.width - 1);
+        let iv = floor_index(v + 0.5).min(self.height - 1);
         let (du, dv) = (u - iu as f64, v - iv as f64);
         let i = iv * self.width + iu;
         let [x, y] = self.xy[i];
@@ -478,6 +516,18 @@ impl RayTable {
             x + j[0] as f64 * du + j[1] as f64 * dv,
             y + j[2] as f64 * du + j[3] as f64 * dv,
         )
+    }
+}
+
+/// `x.floor().max(0.0) as usize` without the call to `floor` (the build targets plain SSE2,
+/// which has no rounding instruction): truncation is the floor at and above zero, and
+/// everything below zero (and NaN) gives 0 either way.
+#[inline]
+fn floor_index(x: f64) -> usize {
+    if x > 0.0 {
+        x as usize
+    } else {
+        0
     }
 }
 
@@ -641,39 +691,63 @@ impl Exposed<'_> {
         let inv = 1.0 / n as f32;
         let bounds = self.frame_bounds();
         let b = &bounds;
+        // The static objects are where they are at any instant: placed once, and only the
+        // moving ones placed again per row and sample.
+        let base = self.scene.place(self.time);
+        let rays = self.camera.distortion.map(|_| ray_table(self.camera));
+        let rays = rays.as_deref();
+        // Each sample's instant, pose and objects as the first row sees them: the rows of a
+        // global shutter share them (their instants are equal to the bit), so they are worked
+        // out once a frame instead of once a row.
+        let t0 = self.time + row_time(0.0, h, self.readout_s);
+        let shared: Vec<Instant> = (0..n)
+            .map(|k| Instant::at(self, t0 + sample_time(k, n, self.exposure_s), &base))
+            .collect();
+        let (base, shared) = (&base, &shared);
         let mut out = vec![[0.0f32; 3]; w * h];
-        out.par_chunks_mut(w).enumerate().for_each(|(v, acc)| {
-            let t_row = self.time + row_time(v as f64, h, self.readout_s);
-            for k in 0..n {
-                let t = t_row + sample_time(k, n, self.exposure_s);
-                let placed = self.scene.place(t);
-                let view = View {
-                    scene: self.scene,
-                    placed: &placed,
-                    camera: self.camera,
-                    pose_wc: (self.pose_at)(t),
-                    occluded: self.occluded,
-                };
-                let seen = view.seen();
-                let (dx, dy) = sample_offset(k, n);
-                view.row(
-                    &seen,
-                    b,
-                    dx,
-                    v as f64 + dy,
-                    w,
-                    Some(&self.shading),
-                    |u, s| {
-                        for (ak, ck) in acc[u].iter_mut().zip(s.colour) {
-                            *ak += ck;
+        out.par_chunks_mut(w).enumerate().for_each_init(
+            || None::<Instant>,
+            |own, (v, acc)| {
+                let t_row = self.time + row_time(v as f64, h, self.readout_s);
+                for (k, first) in shared.iter().enumerate() {
+                    let t = t_row + sample_time(k, n, self.exposure_s);
+                    let at = if first.t.to_bits() == t.to_bits() {
+                        first
+                    } else {
+                        match own {
+                            Some(i) => i.move_to(self, t, base),
+                            None => *own = Some(Instant::at(self, t, base)),
                         }
-                    },
-                );
-            }
-            for a in acc.iter_mut() {
-                *a = a.map(|x| x * inv);
-            }
-        });
+                        own.as_ref().expect("set just above")
+                    };
+                    let view = View {
+                        scene: self.scene,
+                        placed: &at.placed,
+                        camera: self.camera,
+                        pose_wc: at.pose_wc,
+                        occluded: self.occluded,
+                    };
+                    let (dx, dy) = sample_offset(k, n);
+                    view.row(
+                        rays,
+                        &at.seen,
+                        b,
+                        dx,
+                        v as f64 + dy,
+                        w,
+                        Some(&self.shading),
+                        |u, s| {
+                            for (ak, ck) in acc[u].iter_mut().zip(s.colour) {
+                                *ak += ck;
+                            }
+                        },
+                    );
+                }
+                for a in acc.iter_mut() {
+                    *a = a.map(|x| x * inv);
+                }
+            },
+        );
         out
     }
 
@@ -712,6 +786,48 @@ impl Exposed<'_> {
                 }
             })
             .collect()
+    }
+}
+
+/// An instant of an [`Exposed`] render: the camera pose and the objects placed and seen from
+/// the camera centre then.
+struct Instant {
+    /// Seconds since frame 0.
+    t: f64,
+    pose_wc: Isometry3<f64>,
+    placed: Vec<Placed>,
+    seen: Vec<Seen>,
+}
+
+impl Instant {
+    /// The instant `t` of `exposed`, its objects moved from `base` ([`Scene::place`] at any
+    /// time).
+    fn at(exposed: &Exposed, t: f64, base: &[Placed]) -> Instant {
+        let mut i = Instant {
+            t,
+            pose_wc: Isometry3::identity(),
+            placed: Vec::new(),
+            seen: Vec::new(),
+        };
+        i.move_to(exposed, t, base);
+        i
+    }
+
+    /// Makes this the instant `t` (reusing its buffers).
+    fn move_to(&mut self, exposed: &Exposed, t: f64, base: &[Placed]) {
+        self.t = t;
+        self.pose_wc = (exposed.pose_at)(t);
+        self.placed.clear();
+        self.placed.extend_from_slice(base);
+        exposed.scene.place_moving(t, &mut self.placed);
+        View {
+            scene: exposed.scene,
+            placed: &self.placed,
+            camera: exposed.camera,
+            pose_wc: self.pose_wc,
+            occluded: exposed.occluded,
+        }
+        .seen_into(&mut self.seen);
     }
 }
 
@@ -780,6 +896,31 @@ mod tests {
                         assert!((x * cam.fx + cam.cx - uu).abs() < 1e-6);
                         assert!((y * cam.fy + cam.cy - vu).abs() < 1e-6);
                     }
+                }
+            }
+        }
+    }
+
+    /// The cone of a segment's camera-frame box holds every ray of the segment, turned into
+    /// the world, with the margin to spare (the cone test culls nothing any ray could hit).
+    #[test]
+    fn segment_cone_holds_its_rays() {
+        let cam = Camera::tum_fr1();
+        let table = RayTable::new(&cam);
+        for (k, v) in [0.0, 11.3, 239.5, 479.0].into_iter().enumerate() {
+            let pose = pose_at(&Trajectory::Xyz, 0.37 * k as f64);
+            for x0 in [-0.5, 0.0, 300.25, 624.0] {
+                let dcs: Vec<Vector3<f64>> = (0..16)
+                    .map(|j| {
+                        let (x, y) = table.ray(&cam, x0 + j as f64, v);
+                        Vector3::new(x, y, 1.0)
+                    })
+                    .collect();
+                let cone = RayCone::of_camera(dcs.iter(), &pose.rotation);
+                for dc in &dcs {
+                    let d = pose.rotation * dc;
+                    let cos = cone.axis.dot(&d) / d.norm();
+                    assert!(cos >= cone.cos + 0.5 * CONE_MARGIN, "{v} {x0}");
                 }
             }
         }

@@ -376,42 +376,63 @@ impl Scene {
 
     /// The objects placed at time `t` seconds.
     pub fn place(&self, t: f64) -> Vec<Placed> {
-        let bodies: Vec<[PartPose; 8]> = self.people.iter().map(|p| p.pose(t)).collect();
+        let bodies = self.body_poses(t);
         self.objects
             .iter()
             .enumerate()
-            .map(|(i, o)| {
-                if let Some((p, k)) = o.body {
-                    let q = bodies[p][k];
-                    return Placed {
-                        object: i,
-                        centre: q.centre,
-                        cos_yaw: q.yaw.cos(),
-                        sin_yaw: q.yaw.sin(),
-                        pitch: Some((q.pitch.cos(), q.pitch.sin())),
-                        // Limbs move fast: the margin keeps each part inside the bounds that
-                        // the renderer samples a few times per frame.
-                        radius: o.shape.bound() + BODY_BOUND_MARGIN,
-                    };
-                }
-                let mut c = Vector3::new(o.centre[0], o.centre[1], o.centre[2]);
-                if let Some(w) = &o.walk {
-                    let a = std::f64::consts::TAU * t / w.period + w.phase;
-                    let along = w.amplitude * a.sin();
-                    let side = w.sway * (2.0 * a).sin();
-                    c.x += w.axis[0] * along - w.axis[1] * side;
-                    c.y += w.axis[1] * along + w.axis[0] * side;
-                }
-                Placed {
-                    object: i,
-                    centre: c,
-                    cos_yaw: o.yaw.cos(),
-                    sin_yaw: o.yaw.sin(),
-                    pitch: None,
-                    radius: o.shape.bound(),
-                }
-            })
+            .map(|(i, o)| self.place_object(i, o, t, &bodies))
             .collect()
+    }
+
+    /// Moves the moving objects of `placed` (objects placed by [`Scene::place`] at any time)
+    /// to time `t`: the same placement as `place(t)`, without recomputing the static objects,
+    /// whose placement does not depend on the time.
+    pub fn place_moving(&self, t: f64, placed: &mut [Placed]) {
+        let bodies = self.body_poses(t);
+        for (i, (o, p)) in self.objects.iter().zip(placed).enumerate() {
+            if o.moves() {
+                *p = self.place_object(i, o, t, &bodies);
+            }
+        }
+    }
+
+    /// The poses of the people's parts at `t`.
+    fn body_poses(&self, t: f64) -> Vec<[PartPose; 8]> {
+        self.people.iter().map(|p| p.pose(t)).collect()
+    }
+
+    /// Object `i` (`o`) placed at `t`, its person's parts at `bodies` when it is a body part.
+    #[inline]
+    fn place_object(&self, i: usize, o: &Object, t: f64, bodies: &[[PartPose; 8]]) -> Placed {
+        if let Some((p, k)) = o.body {
+            let q = bodies[p][k];
+            return Placed {
+                object: i,
+                centre: q.centre,
+                cos_yaw: q.yaw.cos(),
+                sin_yaw: q.yaw.sin(),
+                pitch: Some((q.pitch.cos(), q.pitch.sin())),
+                // Limbs move fast: the margin keeps each part inside the bounds that
+                // the renderer samples a few times per frame.
+                radius: o.shape.bound() + BODY_BOUND_MARGIN,
+            };
+        }
+        let mut c = Vector3::new(o.centre[0], o.centre[1], o.centre[2]);
+        if let Some(w) = &o.walk {
+            let a = std::f64::consts::TAU * t / w.period + w.phase;
+            let along = w.amplitude * a.sin();
+            let side = w.sway * (2.0 * a).sin();
+            c.x += w.axis[0] * along - w.axis[1] * side;
+            c.y += w.axis[1] * along + w.axis[0] * side;
+        }
+        Placed {
+            object: i,
+            centre: c,
+            cos_yaw: o.yaw.cos(),
+            sin_yaw: o.yaw.sin(),
+            pitch: None,
+            radius: o.shape.bound(),
+        }
     }
 
     /// Nearest hit of the ray o + t d (t > 0) with the room and the placed objects.
@@ -457,6 +478,9 @@ impl Scene {
     #[inline]
     pub fn intersect_seen(&self, seen: &[Seen], o: &Vector3<f64>, d: &Vector3<f64>) -> Hit {
         let mut best = room_hit(&self.room, o, d);
+        if seen.is_empty() {
+            return best;
+        }
         let dd = d.dot(d);
         let inv_len = 1.0 / dd.sqrt();
         for s in seen {
@@ -691,6 +715,35 @@ mod tests {
                 assert!(moved > 0.1);
             } else {
                 assert_eq!(moved, 0.0);
+            }
+        }
+    }
+
+    /// Moving the moving objects of a placement to `t` gives `place(t)` to the bit (the
+    /// renderer places the static objects once per frame).
+    #[test]
+    fn place_moving_is_place() {
+        let key = |p: &Placed| {
+            let w = p.world_to_local(&Vector3::new(0.3, -0.7, 1.1));
+            [p.centre.x, p.centre.y, p.centre.z, p.radius, w.x, w.y, w.z].map(f64::to_bits)
+        };
+        for moving in [
+            MovingObjects::default(),
+            MovingObjects {
+                count: 2,
+                speed: 1.0,
+                bodies: Some(Activity::Walking),
+            },
+        ] {
+            let scene = Scene::new(4, Some(&moving));
+            let mut placed = scene.place(0.0);
+            for t in [0.25, 1.7, 13.0] {
+                scene.place_moving(t, &mut placed);
+                let fresh = scene.place(t);
+                assert_eq!(placed.len(), fresh.len());
+                for (a, b) in placed.iter().zip(&fresh) {
+                    assert_eq!((a.object, key(a)), (b.object, key(b)), "t {t}");
+                }
             }
         }
     }
