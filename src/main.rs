@@ -3,6 +3,7 @@
 //! (`slam-core`, `ate-eval`, `datasets`, `synth`).
 
 mod analysis;
+mod bench;
 mod columns;
 mod commands;
 mod config_file;
@@ -14,6 +15,7 @@ mod fuzz_cli;
 mod regress;
 mod report;
 mod runner;
+mod seeded_runs;
 mod select;
 mod sweep;
 mod vocab_file;

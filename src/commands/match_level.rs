@@ -3,12 +3,12 @@
 //! and `match.csv` (every run of every step) written to `--out`.
 
 use crate::config_file::{base_config, overlay_file};
-use crate::difficulty::{bisect, LevelOutcome, MatchSetup, MatchStatus};
+use crate::difficulty::request::{self, mm};
+use crate::difficulty::{bisect, LevelOutcome, MatchSetup};
 use crate::runner::remembering;
 use crate::select::{open, LoadOptions, Source};
 use anyhow::{bail, Context, Result};
-use ate_eval::io::write_atomic;
-use perturb::{NamedChain, Subject};
+use perturb::Subject;
 use std::path::PathBuf;
 
 /// Arguments of `noisefree match`.
@@ -66,39 +66,9 @@ pub struct MatchArgs {
     pub quiet: bool,
 }
 
-/// The chain a twin's camera has, from the name of the sequence it imitates.
-fn chain_of(imitates: &str) -> Option<NamedChain> {
-    let s = imitates.to_ascii_lowercase();
-    if s.starts_with("fr1") {
-        Some(NamedChain::KinectFr1)
-    } else if s.starts_with("fr2") {
-        Some(NamedChain::KinectFr2)
-    } else if s.starts_with("fr3") {
-        Some(NamedChain::KinectFr3)
-    } else if s.starts_with('v') || s.starts_with("mh") {
-        Some(NamedChain::Euroc)
-    } else {
-        None
-    }
-}
-
-/// Parses `0.023`, `23mm`, `0.023m` into metres.
-fn parse_metres(text: &str) -> Result<f64> {
-    let t = text.trim();
-    let (num, scale) = match t.strip_suffix("mm") {
-        Some(n) => (n, 1e-3),
-        None => (t.strip_suffix('m').unwrap_or(t), 1.0),
-    };
-    let v: f64 = num.trim().parse().map_err(|_| {
-        anyhow::anyhow!("--target {t:?}: expected metres (0.023), millimetres (23mm) or `paper`")
-    })?;
-    if !(v.is_finite() && v > 0.0) {
-        bail!("--target {t:?}: must be a positive ATE");
-    }
-    Ok(v * scale)
-}
-
-/// Runs `noisefree match`.
+/// Runs `noisefree match`: resolves the chain, target and range, opens the sequence (checked
+/// against the chain before anything runs), bisects with a line per level, writes `match.json`
+/// and `match.csv`, and prints the verdict.
 pub fn run(args: MatchArgs) -> Result<()> {
     if args.runs == 0 {
         bail!("--runs must be at least 1");
@@ -113,39 +83,9 @@ pub fn run(args: MatchArgs) -> Result<()> {
     let imitated = entry
         .and_then(|e| e.imitates.as_deref())
         .and_then(|name| catalog.get(name).ok());
-    let subject = match &args.chain {
-        Some(c) => Subject::parse(c).context("--chain")?,
-        None => {
-            let named = imitated.and_then(|e| chain_of(&e.name)).with_context(|| {
-                format!("--chain: {label} imitates no TUM or EuRoC sequence; name a chain")
-            })?;
-            Subject::Named(named)
-        }
-    };
-    let target = if args.target.trim() == "paper" {
-        let e = imitated.with_context(|| {
-            format!("--target paper: {label} is not a twin of a sequence of the paper")
-        })?;
-        match e.paper.as_ref().and_then(|p| p.orb_slam2) {
-            Some(datasets::catalog::Ate::Metres(m)) => m,
-            Some(datasets::catalog::Ate::Failure) => bail!(
-                "--target paper: the paper's ORB-SLAM2 failed on {} ('F'); give a target",
-                e.name
-            ),
-            None => bail!(
-                "--target paper: the paper gives no ORB-SLAM2 figure for {}",
-                e.name
-            ),
-        }
-    } else {
-        parse_metres(&args.target)?
-    };
-    let max_valid = match subject {
-        Subject::Named(c) | Subject::Without(c, _) => (c.max_level() * 1000.0).floor() / 1000.0,
-        Subject::Family(f) => f.range().1,
-    };
-    let high = args.max_level.unwrap_or(max_valid.min(8.0));
-    subject.check_level(high).context("--max-level")?;
+    let subject = request::subject_of(args.chain.as_deref(), imitated, &label)?;
+    let target = request::target_of(&args.target, imitated, &label)?;
+    let high = request::highest_level(subject, args.max_level)?;
     let opts = LoadOptions {
         data_dir: datasets::data_root(args.data_dir.as_deref()),
         frames: args.frames,
@@ -184,15 +124,48 @@ pub fn run(args: MatchArgs) -> Result<()> {
             args.tolerance * 100.0
         );
     }
+    let started = std::time::Instant::now();
+    let result = bisect_in_pool(&args, &setup, target, high, started)?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("noisefree-out").join(format!("match-{label}")));
+    let json = serde_json::json!({
+        "sequence": label,
+        "chain": subject.name(),
+        "target_m": target,
+        "runs": args.runs,
+        "perturb_seed": args.perturb_seed,
+        "frames": frames.len(),
+        "range": [0.0, high],
+        "tolerance": args.tolerance,
+        "wall_s": started.elapsed().as_secs_f64(),
+        "result": result,
+    });
+    request::write_files(&out, &json, &result, args.perturb_seed)?;
+    let line = request::verdict(&label, subject, target, high, args.tolerance, &result)?;
+    println!("{line}");
+    Ok(())
+}
+
+/// The bisection on `--jobs` threads, each level measured printed (unless `--quiet`) with the
+/// time since `started`.
+fn bisect_in_pool(
+    args: &MatchArgs,
+    setup: &MatchSetup<'_>,
+    target: f64,
+    high: f64,
+    started: std::time::Instant,
+) -> Result<crate::difficulty::MatchResult> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.jobs.unwrap_or(0))
         .build()
         .context("starting the worker pool")?;
-    let started = std::time::Instant::now();
+    let subject: Subject = setup.subject;
     let quiet = args.quiet;
-    let result = pool.install(|| {
+    pool.install(|| {
         bisect(
-            &setup,
+            setup,
             target,
             (0.0, high),
             args.max_steps,
@@ -210,107 +183,5 @@ pub fn run(args: MatchArgs) -> Result<()> {
                 }
             },
         )
-    })?;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("noisefree-out").join(format!("match-{label}")));
-    let json = serde_json::json!({
-        "sequence": label,
-        "chain": subject.name(),
-        "target_m": target,
-        "runs": args.runs,
-        "perturb_seed": args.perturb_seed,
-        "frames": frames.len(),
-        "range": [0.0, high],
-        "tolerance": args.tolerance,
-        "wall_s": started.elapsed().as_secs_f64(),
-        "result": result,
-    });
-    write_atomic(
-        &out.join("match.json"),
-        serde_json::to_string_pretty(&json)?.as_bytes(),
-    )?;
-    let mut csv = csv::Writer::from_writer(Vec::new());
-    csv.write_record([
-        "step",
-        "level",
-        "run",
-        "perturb_seed",
-        "seed",
-        "ate_m",
-        "failed",
-    ])?;
-    for (k, s) in result.steps.iter().enumerate() {
-        for (i, a) in s.ates.iter().enumerate() {
-            csv.write_record([
-                k.to_string(),
-                s.level.to_string(),
-                i.to_string(),
-                (args.perturb_seed + i as u64).to_string(),
-                i.to_string(),
-                a.map(|v| v.to_string()).unwrap_or_default(),
-                a.is_none().to_string(),
-            ])?;
-        }
-    }
-    write_atomic(&out.join("match.csv"), &csv.into_inner()?)?;
-    match result.status {
-        MatchStatus::Matched {
-            level,
-            median,
-            within_tolerance,
-        } => {
-            println!(
-                "{label}: {subject}:{level} gives the baseline a median ATE of {} (target {}{}) after {} levels",
-                mm(median),
-                mm(target),
-                if within_tolerance {
-                    String::new()
-                } else {
-                    format!(", not within {} %: the closest level measured", args.tolerance * 100.0)
-                },
-                result.steps.len()
-            );
-        }
-        MatchStatus::BelowRange { at_low, at_high } => bail!(
-            "{label}: the target {} lies below what {subject} reaches: median ATE {} at level 0, {} at {high} (the twin is already harder)",
-            mm(target),
-            mm(at_low),
-            mm(at_high)
-        ),
-        MatchStatus::AboveRange { at_low, at_high } => bail!(
-            "{label}: the target {} lies above what {subject} reaches: median ATE {} at level 0, {} at {high} (raise --max-level, or the chain cannot make it that hard)",
-            mm(target),
-            mm(at_low),
-            mm(at_high)
-        ),
-    }
-    Ok(())
-}
-
-/// An ATE in millimetres, or "failed" for an infinite median.
-fn mm(m: f64) -> String {
-    if m.is_finite() {
-        format!("{:.1} mm", m * 1e3)
-    } else {
-        "failed (more than half the runs)".into()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn targets_and_chains_are_read() {
-        assert_eq!(parse_metres("0.023").unwrap(), 0.023);
-        assert!((parse_metres("23mm").unwrap() - 0.023).abs() < 1e-15);
-        assert_eq!(parse_metres("0.5m").unwrap(), 0.5);
-        assert!(parse_metres("-1").is_err() && parse_metres("abc").is_err());
-        assert_eq!(chain_of("fr1_desk"), Some(NamedChain::KinectFr1));
-        assert_eq!(chain_of("fr3_w_rpy"), Some(NamedChain::KinectFr3));
-        assert_eq!(chain_of("mh01"), Some(NamedChain::Euroc));
-        assert_eq!(chain_of("kinect"), None);
-    }
+    })
 }

@@ -2,16 +2,12 @@
 //! synthetic default), n seeded runs in parallel, writing each run's TUM trajectory, per-frame
 //! CSV and a JSON summary, and printing the ATE where ground truth exists.
 
-use crate::config_file::{apply_switches, base_config, config_name, overlay_file, Switches};
-use crate::runner::{run_extracted, run_sequence, ExtractedSequence, RunOutcome};
-use crate::select::{open, LoadOptions, Source};
+use crate::config_file::{config_name, Switches};
+use crate::seeded_runs::{self, load, record, run_seeds, summarise, system_config};
+use crate::select::{LoadOptions, Source};
 use anyhow::{bail, Context, Result};
-use ate_eval::io::{write_atomic, write_tum};
-use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rayon::prelude::*;
-use serde_json::json;
 use slam_core::system::ClusterViews;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Arguments of `noisefree run`.
 // The help texts name placeholders like <sequence>, which rustdoc would read as HTML tags.
@@ -108,70 +104,8 @@ pub struct RunArgs {
     pub quiet: bool,
 }
 
-/// Per-frame CSV of a run.
-fn frames_csv(outcome: &RunOutcome) -> Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for s in &outcome.stats {
-        w.serialize(s)?;
-    }
-    Ok(w.into_inner()?)
-}
-
-/// JSON summary of a run.
-pub fn run_summary(label: &str, config: &str, seed: u64, o: &RunOutcome) -> serde_json::Value {
-    let (mi, mo) = o.mean_inliers_outliers();
-    json!({
-        "sequence": label, "config": config, "seed": seed,
-        "ate_rmse_m": o.ate_rmse(),
-        "ate": o.ate.as_ref().map(|a| a.stats),
-        "frames": o.frames, "tracked": o.tracked, "failed": o.failed,
-        "keyframes": o.keyframes, "map_points": o.map_points,
-        "loop_closing": o.loop_closing,
-        "loops_closed": o.loops.len(),
-        "loops": o.loops.iter().map(|l| json!({
-            "frame": l.frame, "timestamp": l.timestamp,
-            "keyframe": l.event.current.0, "loop_keyframe": l.event.loop_kf.0,
-            "keyframe_timestamp": l.keyframe_stamps.0,
-            "loop_keyframe_timestamp": l.keyframe_stamps.1,
-            "matches": l.event.matches,
-            "correction_m": l.event.correction_m, "correction_deg": l.event.correction_deg,
-            "true_distance_m": l.truth.map(|t| t.0), "true_angle_deg": l.truth.map(|t| t.1),
-        })).collect::<Vec<_>>(),
-        "mean_inliers": mi, "mean_outliers": mo,
-        "wall_s": o.wall_s, "fps": o.fps(),
-    })
-}
-
-/// Writes a run's trajectory, per-frame CSV and summary (with the perturbation it ran under).
-fn write_run(dir: &Path, summary: &serde_json::Value, o: &RunOutcome) -> Result<()> {
-    write_tum(&dir.join("trajectory.txt"), &o.trajectory)?;
-    write_atomic(&dir.join("frames.csv"), &frames_csv(o)?)?;
-    let s = serde_json::to_string_pretty(summary)?;
-    write_atomic(&dir.join("summary.json"), s.as_bytes())?;
-    Ok(())
-}
-
-/// "2 loops closed (frames 812, 1240)", "no loop closed", or "loop closing off".
-fn loops_text(o: &RunOutcome) -> String {
-    if !o.loop_closing {
-        return "loop closing off".into();
-    }
-    match o.loops.len() {
-        0 => "no loop closed".into(),
-        n => format!(
-            "{n} loop{} closed (frame{} {})",
-            if n == 1 { "" } else { "s" },
-            if n == 1 { "" } else { "s" },
-            o.loops
-                .iter()
-                .map(|l| l.frame.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    }
-}
-
-/// Runs `noisefree run`.
+/// Runs `noisefree run`: loads (and perturbs) the sequence, builds the configuration and
+/// vocabulary, runs the seeds, writes and prints each run and, over several, their mean.
 pub fn run(args: RunArgs) -> Result<()> {
     if args.runs == 0 {
         bail!("--runs must be at least 1");
@@ -181,7 +115,6 @@ pub fn run(args: RunArgs) -> Result<()> {
         None => datasets::Catalog::embedded(),
     };
     let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
-    let label = source.label();
     // Checked before anything is read.
     let chain =
         perturb::Chain::parse(args.perturb.as_deref().unwrap_or("")).context("--perturb")?;
@@ -192,49 +125,27 @@ pub fn run(args: RunArgs) -> Result<()> {
         synth_without: args.synth_without.clone(),
         camera: args.camera.clone(),
     };
-    if !args.quiet {
-        eprintln!("loading {label} ...");
-    }
     // Several runs share every frame's features, extracted once as the frames are read; a
     // single run decodes the sequence and extracts as it tracks.
-    let (seq, frames) = open(&source, &catalog, &opts)?;
-    let (mut seq, frames) = perturb::perturb_sequence(&seq, frames, &chain, args.perturb_seed)
-        .with_context(|| format!("--perturb {chain}"))?;
-    if !chain.is_identity() && !args.quiet {
-        eprintln!(
-            "{label}: perturbed by {} (perturbation seed {})",
-            chain.effective(),
-            args.perturb_seed
-        );
-    }
-    let reader = if args.runs > 1 {
-        Some(frames)
-    } else {
-        seq.frames = frames
-            .without_colour()
-            .read_all()
-            .with_context(|| format!("loading {label}"))?;
-        None
+    let loaded = load(
+        &source,
+        &catalog,
+        &opts,
+        &chain,
+        args.perturb_seed,
+        args.runs > 1,
+        args.quiet,
+    )?;
+    let label = loaded.label.clone();
+    let switches = Switches {
+        mcor: args.mcor,
+        avc: args.avc,
+        mapping_lag: args.mapping_lag,
+        no_loop_closing: args.no_loop_closing,
+        mcor_cluster: args.mcor_cluster,
+        rc: args.rc,
     };
-    let n_frames = reader.as_ref().map_or(seq.len(), |r| r.len());
-    let mut config = base_config(seq.camera.sensor);
-    if let Some(p) = &args.config {
-        config = overlay_file(&config, p)?;
-    }
-    let config = apply_switches(
-        config,
-        Switches {
-            mcor: args.mcor,
-            avc: args.avc,
-            mapping_lag: args.mapping_lag,
-            no_loop_closing: args.no_loop_closing,
-            mcor_cluster: args.mcor_cluster,
-            rc: args.rc,
-        },
-    );
-    config
-        .check()
-        .map_err(|e| anyhow::anyhow!("{e} (from the command line or --config)"))?;
+    let config = system_config(loaded.seq.camera.sensor, args.config.as_deref(), switches)?;
     let vocab_flag = match (&args.vocabulary, &args.config) {
         (Some(v), _) => Some(v.clone()),
         (None, Some(c)) => crate::config_file::vocabulary_in_file(c)?,
@@ -245,13 +156,13 @@ pub fn run(args: RunArgs) -> Result<()> {
     let out = args
         .out
         .clone()
-        .unwrap_or_else(|| PathBuf::from("noisefree-out").join(&label));
+        .unwrap_or_else(|| seeded_runs::default_out(&label));
     let seeds: Vec<u64> = (0..args.runs).map(|k| args.seed + k).collect();
     if !args.quiet {
         eprintln!(
             "{label}: {} frames, {} camera, config {cname}, {} run(s), output {}",
-            n_frames,
-            if seq.camera.sensor == slam_core::SensorKind::Rgbd {
+            loaded.frames(),
+            if loaded.seq.camera.sensor == slam_core::SensorKind::Rgbd {
                 "RGB-D"
             } else {
                 "stereo"
@@ -260,97 +171,10 @@ pub fn run(args: RunArgs) -> Result<()> {
             out.display()
         );
     }
-    let multi = MultiProgress::with_draw_target(if args.quiet {
-        ProgressDrawTarget::hidden()
-    } else {
-        ProgressDrawTarget::stderr()
-    });
-    let style = ProgressStyle::with_template(
-        "{prefix:>10} [{bar:40}] {pos}/{len} frames {per_sec} eta {eta}",
-    )
-    .expect("static template")
-    .progress_chars("=> ");
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.jobs.unwrap_or(0))
-        .build()
-        .context("starting the worker pool")?;
-    let extracted = match &reader {
-        Some(frames) => {
-            let bar = multi.add(ProgressBar::new(n_frames as u64));
-            bar.set_style(style.clone());
-            bar.set_prefix("features");
-            let orbs = std::slice::from_ref(&config.orb);
-            let mut e = pool
-                .install(|| {
-                    ExtractedSequence::extract_all(frames, &seq.camera, orbs, || bar.inc(1))
-                })
-                .with_context(|| format!("reading the frames of {label}"))?;
-            bar.finish_and_clear();
-            Some(e.remove(0))
-        }
-        None => None,
-    };
-    let results: Vec<(u64, RunOutcome)> = pool.install(|| {
-        seeds
-            .par_iter()
-            .map(|&seed| {
-                let bar = multi.add(ProgressBar::new(n_frames as u64));
-                bar.set_style(style.clone());
-                bar.set_prefix(format!("seed {seed}"));
-                let mut cfg = config.clone();
-                cfg.seed = seed;
-                let vocabulary = vocabulary.vocabulary.as_ref();
-                let progress = |i: usize| bar.set_position(i as u64);
-                let o = match &extracted {
-                    Some(e) => run_extracted(&seq, e, &cfg, vocabulary, progress),
-                    None => run_sequence(&seq, &cfg, vocabulary, progress),
-                };
-                bar.finish_and_clear();
-                (seed, o)
-            })
-            .collect()
-    });
-    let mut summaries = Vec::new();
-    for (seed, o) in &results {
-        let dir = if results.len() == 1 {
-            out.clone()
-        } else {
-            out.join(format!("seed{seed}"))
-        };
-        let mut summary = run_summary(&label, cname, *seed, o);
-        summary["perturbation"] = json!(chain.effective().to_string());
-        summary["perturbation_seed"] = json!(args.perturb_seed);
-        write_run(&dir, &summary, o)?;
-        summaries.push(summary);
-        let ate = o
-            .ate_rmse()
-            .map(|a| format!("{a:.4} m"))
-            .unwrap_or_else(|| "n/a".into());
-        println!(
-            "{label} [{cname}] seed {seed}: ATE RMSE {ate}, tracked {}/{} frames{}, {} keyframes, {} map points, {}, {:.1} fps",
-            o.tracked,
-            o.frames,
-            if o.failed { " (FAILED)" } else { "" },
-            o.keyframes,
-            o.map_points,
-            loops_text(o),
-            o.fps()
-        );
-    }
-    if results.len() > 1 {
-        let ates: Vec<f64> = results.iter().filter_map(|(_, o)| o.ate_rmse()).collect();
-        let n = ates.len().max(1) as f64;
-        let mean = ates.iter().sum::<f64>() / n;
-        let std = (ates.iter().map(|a| (a - mean) * (a - mean)).sum::<f64>() / n).sqrt();
-        let failures = results.iter().filter(|(_, o)| o.failed).count();
-        println!("{label} [{cname}] over {} runs: mean ATE {mean:.4} m, std {std:.4} m, {failures} failed", results.len());
-        let doc = json!({"sequence": label, "config": cname, "runs": summaries, "mean_ate_m": mean, "std_ate_m": std, "failures": failures});
-        write_atomic(
-            &out.join("summary.json"),
-            serde_json::to_string_pretty(&doc)?.as_bytes(),
-        )?;
-    }
-    Ok(())
+    let vocabulary = vocabulary.vocabulary.as_ref();
+    let results = run_seeds(&loaded, &config, vocabulary, &seeds, args.jobs, args.quiet)?;
+    let summaries = record(&loaded, cname, &results, &chain, args.perturb_seed, &out)?;
+    summarise(&label, cname, &results, summaries, &out)
 }
 
 /// Parses `--mcor-cluster`.

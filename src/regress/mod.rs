@@ -5,7 +5,9 @@
 //! code does; the tolerances say how far they may move before that counts as a regression.
 //!
 //! - [`cases`]: the suite and what a run of a case measures;
-//! - [`golden`]: the golden file, the comparison and its table.
+//! - [`golden`]: the golden file, the comparison and its table;
+//! - [`suite`]: one pass of the suite, the cases run and their figures and spreads measured.
 
 pub mod cases;
 pub mod golden;
+pub mod suite;

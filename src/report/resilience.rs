@@ -274,103 +274,143 @@ fn level_text(l: f64) -> String {
 /// The Markdown table (ATE in mm, mean ± std, breaking level per row) and the tidy CSV (one row
 /// per sequence, system and level, in metres) of one family.
 pub fn table(family: &str, curves: &[Curve]) -> Rendered {
-    let fam = Family::parse(family).ok();
-    let unit = fam.map_or("", Family::unit);
+    let unit = Family::parse(family).ok().map_or("", Family::unit);
     let mut md = format!("## Resilience to {family} ({unit})\n\n");
     let mut sequences: Vec<&str> = curves.iter().map(|c| c.sequence.as_str()).collect();
     sequences.dedup();
     for seq in sequences {
         let rows: Vec<&Curve> = curves.iter().filter(|c| c.sequence == seq).collect();
-        let mut levels: Vec<f64> = Vec::new();
-        for c in &rows {
-            for l in &c.levels {
-                if !levels.contains(&l.level) {
-                    levels.push(l.level);
-                }
+        md.push_str(&sequence_section(family, seq, &rows));
+    }
+    md.push_str(&table_notes(curves));
+    Rendered {
+        markdown: md,
+        csv: tidy_csv(family, unit, curves),
+    }
+}
+
+/// The levels any of `rows` measured, mildest first: the columns of a sequence's table.
+fn levels_of(family: &str, rows: &[&Curve]) -> Vec<f64> {
+    let mut levels: Vec<f64> = Vec::new();
+    for c in rows {
+        for l in &c.levels {
+            if !levels.contains(&l.level) {
+                levels.push(l.level);
             }
         }
-        levels.sort_by(|a, b| severity(family, *a, *b));
-        let _ = writeln!(md, "### {seq}\n");
+    }
+    levels.sort_by(|a, b| severity(family, *a, *b));
+    levels
+}
+
+/// One sequence's part of the Markdown: its heading and a table of one row per system.
+fn sequence_section(family: &str, seq: &str, rows: &[&Curve]) -> String {
+    let levels = levels_of(family, rows);
+    let mut md = String::new();
+    let _ = writeln!(md, "### {seq}\n");
+    let _ = writeln!(
+        md,
+        "| system | {} | breaking level |",
+        levels
+            .iter()
+            .map(|l| format!("{family} {}", level_text(*l)))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    let _ = writeln!(md, "|---|{}---|", "---|".repeat(levels.len()));
+    for c in rows {
         let _ = writeln!(
             md,
-            "| system | {} | breaking level |",
-            levels
-                .iter()
-                .map(|l| format!("{family} {}", level_text(*l)))
-                .collect::<Vec<_>>()
-                .join(" | ")
+            "| {} | {} | {}{} |",
+            c.label,
+            level_cells(c, &levels).join(" | "),
+            breaking_text(c),
+            shares_text(c)
         );
-        let _ = writeln!(md, "|---|{}---|", "---|".repeat(levels.len()));
-        for c in rows {
-            // One number of decimals per row: three significant digits of its smallest mean,
-            // so the levels of one system compare digit for digit (as Table III's rows).
-            let d = crate::report::tables::mm_decimals(
-                c.levels
-                    .iter()
-                    .filter(|l| !l.is_failure())
-                    .filter_map(LevelStats::mean),
-            );
-            let cells: Vec<String> = levels
-                .iter()
-                .map(|lv| match c.levels.iter().find(|l| l.level == *lv) {
-                    None => "".into(),
-                    Some(l) if l.is_failure() => format!("F ({}/{})", l.failed, l.n),
-                    Some(l) => {
-                        let mut t = mm_pair(l.mean().unwrap_or(0.0), l.std().unwrap_or(0.0), d);
-                        if l.failed > 0 {
-                            let _ = write!(t, " ({}F)", l.failed);
-                        }
-                        t
-                    }
-                })
-                .collect();
-            let breaking = match c.breaking_level() {
-                Some(b) => level_text(b),
-                None if c.levels.first().is_some_and(|l| l.level == 0.0) => format!(
-                    "none up to {}",
-                    c.levels
-                        .last()
-                        .map_or(String::new(), |l| level_text(l.level))
-                ),
-                None => "no level 0".into(),
-            };
-            let shares = c.breaking_shares().map_or_else(String::new, |(at, held)| {
-                let mut parts: Vec<String> = at
-                    .iter()
-                    .filter(|(_, s)| *s >= 0.05)
-                    .map(|(l, s)| format!("{} {:.0} %", level_text(*l), s * 100.0))
-                    .collect();
-                if held >= 0.05 {
-                    parts.push(format!("holds {:.0} %", held * 100.0));
-                }
-                format!(" ({})", parts.join(", "))
-            });
-            let _ = writeln!(
-                md,
-                "| {} | {} | {breaking}{shares} |",
-                c.label,
-                cells.join(" | ")
-            );
-        }
-        md.push('\n');
     }
+    md.push('\n');
+    md
+}
+
+/// A system's cells at `levels`: `mean ± std` in millimetres (with `(kF)` for k failed runs),
+/// `F (k/n)` for a failed level, empty where the system was not run.
+fn level_cells(c: &Curve, levels: &[f64]) -> Vec<String> {
+    // One number of decimals per row: three significant digits of its smallest mean, so the
+    // levels of one system compare digit for digit (as Table III's rows).
+    let d = crate::report::tables::mm_decimals(
+        c.levels
+            .iter()
+            .filter(|l| !l.is_failure())
+            .filter_map(LevelStats::mean),
+    );
+    levels
+        .iter()
+        .map(|lv| match c.levels.iter().find(|l| l.level == *lv) {
+            None => "".into(),
+            Some(l) if l.is_failure() => format!("F ({}/{})", l.failed, l.n),
+            Some(l) => {
+                let mut t = mm_pair(l.mean().unwrap_or(0.0), l.std().unwrap_or(0.0), d);
+                if l.failed > 0 {
+                    let _ = write!(t, " ({}F)", l.failed);
+                }
+                t
+            }
+        })
+        .collect()
+}
+
+/// The breaking-level cell: the level, `none up to L` when the system held, or `no level 0`.
+fn breaking_text(c: &Curve) -> String {
+    match c.breaking_level() {
+        Some(b) => level_text(b),
+        None if c.levels.first().is_some_and(|l| l.level == 0.0) => format!(
+            "none up to {}",
+            c.levels
+                .last()
+                .map_or(String::new(), |l| level_text(l.level))
+        ),
+        None => "no level 0".into(),
+    }
+}
+
+/// How sure the breaking level is, in brackets: the bootstrap shares of 5 % and more that
+/// break at each level and that hold; empty without a level 0.
+fn shares_text(c: &Curve) -> String {
+    c.breaking_shares().map_or_else(String::new, |(at, held)| {
+        let mut parts: Vec<String> = at
+            .iter()
+            .filter(|(_, s)| *s >= 0.05)
+            .map(|(l, s)| format!("{} {:.0} %", level_text(*l), s * 100.0))
+            .collect();
+        if held >= 0.05 {
+            parts.push(format!("holds {:.0} %", held * 100.0));
+        }
+        format!(" ({})", parts.join(", "))
+    })
+}
+
+/// The paragraph under the tables: units, what 'F' and the breaking level mean.
+fn table_notes(curves: &[Curve]) -> String {
     let runs = curves
         .iter()
         .flat_map(|c| c.levels.iter().map(|l| l.n))
         .max()
         .unwrap_or(0);
-    let _ = writeln!(
-        md,
+    format!(
         "ATE RMSE in millimetres, mean ± std over the runs that did not fail (up to {runs} per cell); \
          'F (k/n)': more than half of the n runs failed (under 80 % of the frames tracked, or no ATE). \
          Breaking level: the first level whose mean ATE exceeds max({BREAK_FACTOR} x the level-0 ATE, \
          level-0 ATE + {} cm), or that fails; 'none up to L': the system held over every level swept. \
          In brackets, how sure that is: the share of {BOOTSTRAP_RESAMPLES} bootstrap resamples of \
          the runs (each level's drawn with replacement, failures included) that break at each \
-         level, and that hold (shares under 5 % left out; the CSV has every one).",
+         level, and that hold (shares under 5 % left out; the CSV has every one).\n",
         BREAK_MARGIN_M * 100.0
-    );
-    // The tidy CSV.
+    )
+}
+
+/// The tidy CSV of one family: a row per sequence, system and level, ATEs in metres, with the
+/// curve's breaking level (or the highest level swept, flagged `held`) and its bootstrap shares.
+fn tidy_csv(family: &str, unit: &str, curves: &[Curve]) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
     let _ = w.write_record([
         "sequence",
@@ -440,8 +480,7 @@ pub fn table(family: &str, curves: &[Curve]) -> Rendered {
             ]);
         }
     }
-    let csv = String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default();
-    Rendered { markdown: md, csv }
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
 #[cfg(test)]

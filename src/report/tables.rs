@@ -370,96 +370,143 @@ pub fn table3(
     labels: &BTreeMap<String, String>,
     vocabularies: &BTreeMap<String, String>,
 ) -> Rendered {
-    let mapping_lag = settings.mapping_lag;
     let kinds: Vec<ConfigKind> = ConfigKind::EVERY
         .into_iter()
         .filter(|k| records.iter().any(|r| r.config == k.name()))
         .collect();
     let systems = external_columns(records, labels);
-    let mut header = vec!["sequence".to_string(), "class".to_string()];
-    for k in &kinds {
-        header.push(system_label(k.name(), labels));
-    }
-    header.extend(systems.iter().map(|(_, label)| label.clone()));
-    if paper {
-        for k in &kinds {
-            header.push(format!("{} (paper)", column_name(*k)));
-        }
-    }
-    let mut rows = Vec::new();
-    for seq in sequence_order(records, catalog) {
-        let entry = catalog.get(&seq).ok();
-        // A twin prints the paper's figures of the real sequence it imitates.
-        let imitated = entry
-            .and_then(|e| e.imitates.as_deref())
-            .and_then(|name| catalog.get(name).ok());
-        let class = match (entry.and_then(|e| e.class), imitated.and_then(|r| r.class)) {
-            (Some(Class::Easy), _) => "easy",
-            (Some(Class::Hard), _) => "hard",
-            (None, Some(Class::Easy)) => "twin of easy",
-            (None, Some(Class::Hard)) => "twin of hard",
-            (None, None) => "synthetic",
-        };
-        let mut row = vec![
-            entry
-                .and_then(|e| e.paper_name.clone())
-                .unwrap_or_else(|| seq.clone()),
-            class.into(),
-        ];
-        let mut cells: Vec<Option<Cell>> = Vec::new();
-        for k in &kinds {
-            let runs: Vec<&RunRecord> = records
-                .iter()
-                .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
-                .collect();
-            cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
-        }
-        for (name, _) in &systems {
-            let runs: Vec<&RunRecord> = records
-                .iter()
-                .filter(|r| r.sequence == seq && &r.config == name)
-                .collect();
-            cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
-        }
-        row.extend(cell_texts(&cells));
-        if paper {
-            for k in &kinds {
-                let p = entry
-                    .and_then(|e| e.paper.as_ref())
-                    .or_else(|| imitated.and_then(|r| r.paper.as_ref()));
-                row.push(match (p, k) {
-                    (None, _) => "-".into(),
-                    (Some(p), ConfigKind::Orb) => paper_text(p.orb_slam2),
-                    (
-                        Some(p),
-                        ConfigKind::Mcor | ConfigKind::McorFrames | ConfigKind::McorKeyframes,
-                    ) => paper_text(p.mcor),
-                    (Some(p), ConfigKind::Avc) => paper_text(p.avc),
-                    (
-                        Some(p),
-                        ConfigKind::McorAvc
-                        | ConfigKind::McorFramesAvc
-                        | ConfigKind::McorKeyframesAvc,
-                    ) => paper_text(p.mcor_avc),
-                    (Some(_), ConfigKind::Rc) => "-".into(),
-                });
-            }
-        }
-        rows.push(row);
-    }
+    let mut header = table3_header(&kinds, &systems, labels, paper);
+    let mut rows: Vec<Vec<String>> = sequence_order(records, catalog)
+        .into_iter()
+        .map(|seq| table3_row(&seq, records, catalog, &kinds, &systems, paper))
+        .collect();
     rows.sort_by_key(|r| match r[1].as_str() {
         "easy" => 0,
         "hard" => 1,
         _ => 2,
     });
+    let dropped = drop_empty_columns(&mut header, &mut rows, 2);
+    let notes = table3_protocol_notes(records, &kinds, settings);
+    let notes = table3_further_notes(notes, records, &systems, settings, vocabularies, &dropped);
+    let mut t = render("Table III: ATE RMSE (mm)", &notes, &header, &rows);
+    t.csv = tidy_csv(&main_groups(records, catalog, &kinds, &systems), labels);
+    t
+}
+
+/// Table III's headings: sequence, class, our configurations, the external systems, and with
+/// `paper` the paper's column of each configuration.
+fn table3_header(
+    kinds: &[ConfigKind],
+    systems: &[(String, String)],
+    labels: &BTreeMap<String, String>,
+    paper: bool,
+) -> Vec<String> {
+    let mut header = vec!["sequence".to_string(), "class".to_string()];
+    for k in kinds {
+        header.push(system_label(k.name(), labels));
+    }
+    header.extend(systems.iter().map(|(_, label)| label.clone()));
+    if paper {
+        for k in kinds {
+            header.push(format!("{} (paper)", column_name(*k)));
+        }
+    }
+    header
+}
+
+/// A sequence's class as Table III prints it: the paper's easy / hard, a twin's "twin of" the
+/// class of the sequence it imitates, or "synthetic".
+fn sequence_class(
+    entry: Option<&datasets::catalog::Entry>,
+    imitated: Option<&datasets::catalog::Entry>,
+) -> &'static str {
+    match (entry.and_then(|e| e.class), imitated.and_then(|r| r.class)) {
+        (Some(Class::Easy), _) => "easy",
+        (Some(Class::Hard), _) => "hard",
+        (None, Some(Class::Easy)) => "twin of easy",
+        (None, Some(Class::Hard)) => "twin of hard",
+        (None, None) => "synthetic",
+    }
+}
+
+/// One sequence's row of Table III: its name (the paper's where it has one), class, a cell per
+/// configuration (default parameters) and external system, and with `paper` the paper's
+/// figures (a twin prints those of the real sequence it imitates).
+fn table3_row(
+    seq: &str,
+    records: &[RunRecord],
+    catalog: &Catalog,
+    kinds: &[ConfigKind],
+    systems: &[(String, String)],
+    paper: bool,
+) -> Vec<String> {
+    let entry = catalog.get(seq).ok();
+    let imitated = entry
+        .and_then(|e| e.imitates.as_deref())
+        .and_then(|name| catalog.get(name).ok());
+    let mut row = vec![
+        entry
+            .and_then(|e| e.paper_name.clone())
+            .unwrap_or_else(|| seq.to_string()),
+        sequence_class(entry, imitated).into(),
+    ];
+    let mut cells: Vec<Option<Cell>> = Vec::new();
+    for k in kinds {
+        let runs: Vec<&RunRecord> = records
+            .iter()
+            .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
+            .collect();
+        cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
+    }
+    for (name, _) in systems {
+        let runs: Vec<&RunRecord> = records
+            .iter()
+            .filter(|r| r.sequence == seq && &r.config == name)
+            .collect();
+        cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
+    }
+    row.extend(cell_texts(&cells));
+    if paper {
+        let p = entry
+            .and_then(|e| e.paper.as_ref())
+            .or_else(|| imitated.and_then(|r| r.paper.as_ref()));
+        row.extend(kinds.iter().map(|k| paper_cell(p, *k)));
+    }
+    row
+}
+
+/// The paper's figure for configuration `k` ("-" where it publishes none, as for rc).
+fn paper_cell(p: Option<&datasets::catalog::PaperAte>, k: ConfigKind) -> String {
+    match (p, k) {
+        (None, _) => "-".into(),
+        (Some(p), ConfigKind::Orb) => paper_text(p.orb_slam2),
+        (Some(p), ConfigKind::Mcor | ConfigKind::McorFrames | ConfigKind::McorKeyframes) => {
+            paper_text(p.mcor)
+        }
+        (Some(p), ConfigKind::Avc) => paper_text(p.avc),
+        (
+            Some(p),
+            ConfigKind::McorAvc | ConfigKind::McorFramesAvc | ConfigKind::McorKeyframesAvc,
+        ) => paper_text(p.mcor_avc),
+        (Some(_), ConfigKind::Rc) => "-".into(),
+    }
+}
+
+/// The first part of Table III's notes: units, seeds, parameters, association and alignment,
+/// what 'F' means, and how the runs were made (mapping lag, varied realizations, MC-OR's
+/// clusters).
+fn table3_protocol_notes(
+    records: &[RunRecord],
+    kinds: &[ConfigKind],
+    settings: &FolderSettings,
+) -> String {
     let seeds = records
         .iter()
         .map(|r| r.seed)
         .max()
         .map(|m| m + 1)
         .unwrap_or(0);
-    let dropped = drop_empty_columns(&mut header, &mut rows, 2);
-    let notes = format!(
+    format!(
         "ATE RMSE in millimetres, mean ± population std over the runs (seeds 0..{}), decimals per \
          row: three significant digits of its smallest mean (the tidy table3.csv has every digit, \
          in metres). MC-OR thresholds \
@@ -470,7 +517,7 @@ pub fn table3(
         seeds.saturating_sub(1),
         DEFAULT_TAUS,
         DEFAULT_BASELINE,
-        match mapping_lag {
+        match settings.mapping_lag {
             0 => "Runs are synchronous and single-threaded: the seed reaches only the RANSAC of \
                   relocalization, so runs that never relocalize agree to the bit."
                 .to_string(),
@@ -502,8 +549,21 @@ pub fn table3(
         } else {
             ""
         },
-    );
-    let notes = match external_notes(records, &systems, vocabularies) {
+    )
+}
+
+/// The rest of Table III's notes, appended to `notes`: the external systems, our vocabulary
+/// beside them, what was left out (runs at other parameters, `dropped` columns) and how the
+/// runs differ from the reference's (--synth-without, speed approximations).
+fn table3_further_notes(
+    notes: String,
+    records: &[RunRecord],
+    systems: &[(String, String)],
+    settings: &FolderSettings,
+    vocabularies: &BTreeMap<String, String>,
+    dropped: &[String],
+) -> String {
+    let notes = match external_notes(records, systems, vocabularies) {
         n if n.is_empty() => notes,
         n => format!("{notes} {n}"),
     };
@@ -533,7 +593,7 @@ pub fn table3(
         format!(
             "{notes} Left out for want of a single value: {} (the paper publishes no figure \
              for it).",
-            and_list(&dropped)
+            and_list(dropped)
         )
     };
     let notes = if settings.synth_without.is_empty() {
@@ -544,7 +604,7 @@ pub fn table3(
             settings.synth_without.join(", ")
         )
     };
-    let notes = if settings.approximations.is_empty() {
+    if settings.approximations.is_empty() {
         notes
     } else {
         format!(
@@ -552,10 +612,7 @@ pub fn table3(
              results.",
             settings.approximations.join(", ")
         )
-    };
-    let mut t = render("Table III: ATE RMSE (mm)", &notes, &header, &rows);
-    t.csv = tidy_csv(&main_groups(records, catalog, &kinds, &systems), labels);
-    t
+    }
 }
 
 /// Whether some sequence's runs used more than one synthetic realization (--vary-sequence).

@@ -8,6 +8,11 @@
 //! curve smooth enough to bisect), and the runs of one level differ in their noise. A failed
 //! run (no ATE) counts as worse than any ATE, so a level where more than half fail has an
 //! infinite median.
+//!
+//! [`request`] resolves what `noisefree match` asks (chain, target, range) and writes what it
+//! leaves (`match.json`, `match.csv`, the verdict).
+
+pub mod request;
 
 use crate::runner::{run_extracted, ExtractedSequence};
 use anyhow::{Context, Result};

@@ -1,0 +1,295 @@
+//! The work of `noisefree run`: one sequence (perturbed if asked) run with n SLAM seeds in
+//! parallel under one configuration, with progress bars, each run's TUM trajectory, per-frame
+//! CSV and JSON summary written, a line per run printed, and over several runs their mean.
+//!
+//! Phases: [`load`] (open, perturb, read) -> [`system_config`] -> [`run_seeds`] (features
+//! extracted once when several runs share them) -> [`record`] (files and lines) ->
+//! [`summarise`] (several runs' mean and spread).
+
+use crate::config_file::{apply_switches, base_config, overlay_file, Switches};
+use crate::runner::{run_extracted, run_sequence, ExtractedSequence, RunOutcome};
+use crate::select::{open, LoadOptions, Source};
+use anyhow::{Context, Result};
+use ate_eval::io::{write_atomic, write_tum};
+use datasets::{Catalog, FrameReader, Sequence};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use serde_json::json;
+use slam_core::place::Vocabulary;
+use slam_core::system::Config;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Per-frame CSV of a run.
+fn frames_csv(outcome: &RunOutcome) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for s in &outcome.stats {
+        w.serialize(s)?;
+    }
+    Ok(w.into_inner()?)
+}
+
+/// JSON summary of a run.
+pub fn run_summary(label: &str, config: &str, seed: u64, o: &RunOutcome) -> serde_json::Value {
+    let (mi, mo) = o.mean_inliers_outliers();
+    json!({
+        "sequence": label, "config": config, "seed": seed,
+        "ate_rmse_m": o.ate_rmse(),
+        "ate": o.ate.as_ref().map(|a| a.stats),
+        "frames": o.frames, "tracked": o.tracked, "failed": o.failed,
+        "keyframes": o.keyframes, "map_points": o.map_points,
+        "loop_closing": o.loop_closing,
+        "loops_closed": o.loops.len(),
+        "loops": o.loops.iter().map(|l| json!({
+            "frame": l.frame, "timestamp": l.timestamp,
+            "keyframe": l.event.current.0, "loop_keyframe": l.event.loop_kf.0,
+            "keyframe_timestamp": l.keyframe_stamps.0,
+            "loop_keyframe_timestamp": l.keyframe_stamps.1,
+            "matches": l.event.matches,
+            "correction_m": l.event.correction_m, "correction_deg": l.event.correction_deg,
+            "true_distance_m": l.truth.map(|t| t.0), "true_angle_deg": l.truth.map(|t| t.1),
+        })).collect::<Vec<_>>(),
+        "mean_inliers": mi, "mean_outliers": mo,
+        "wall_s": o.wall_s, "fps": o.fps(),
+    })
+}
+
+/// Writes a run's trajectory, per-frame CSV and summary (with the perturbation it ran under).
+fn write_run(dir: &Path, summary: &serde_json::Value, o: &RunOutcome) -> Result<()> {
+    write_tum(&dir.join("trajectory.txt"), &o.trajectory)?;
+    write_atomic(&dir.join("frames.csv"), &frames_csv(o)?)?;
+    let s = serde_json::to_string_pretty(summary)?;
+    write_atomic(&dir.join("summary.json"), s.as_bytes())?;
+    Ok(())
+}
+
+/// "2 loops closed (frames 812, 1240)", "no loop closed", or "loop closing off".
+fn loops_text(o: &RunOutcome) -> String {
+    if !o.loop_closing {
+        return "loop closing off".into();
+    }
+    match o.loops.len() {
+        0 => "no loop closed".into(),
+        n => format!(
+            "{n} loop{} closed (frame{} {})",
+            if n == 1 { "" } else { "s" },
+            if n == 1 { "" } else { "s" },
+            o.loops
+                .iter()
+                .map(|l| l.frame.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// A sequence ready to run: its frames in memory (one run decodes and extracts as it tracks),
+/// or a reader that [`run_seeds`] extracts from once for several runs.
+pub struct Loaded {
+    /// The sequence's label (tables, file names, messages).
+    pub label: String,
+    /// The sequence (its frames read when `reader` is `None`).
+    pub seq: Sequence,
+    /// The frames still to read, when several runs share their features.
+    pub reader: Option<FrameReader>,
+}
+
+impl Loaded {
+    /// Frames of the sequence.
+    pub fn frames(&self) -> usize {
+        self.reader.as_ref().map_or(self.seq.len(), |r| r.len())
+    }
+}
+
+/// Opens `source`, perturbs it by `chain` (seeded by `perturb_seed`, said on standard error
+/// unless `quiet`), and reads its frames now unless `several` runs will share their features.
+pub fn load(
+    source: &Source,
+    catalog: &Catalog,
+    opts: &LoadOptions,
+    chain: &perturb::Chain,
+    perturb_seed: u64,
+    several: bool,
+    quiet: bool,
+) -> Result<Loaded> {
+    let label = source.label();
+    if !quiet {
+        eprintln!("loading {label} ...");
+    }
+    let (seq, frames) = open(source, catalog, opts)?;
+    let (mut seq, frames) = perturb::perturb_sequence(&seq, frames, chain, perturb_seed)
+        .with_context(|| format!("--perturb {chain}"))?;
+    if !chain.is_identity() && !quiet {
+        eprintln!(
+            "{label}: perturbed by {} (perturbation seed {})",
+            chain.effective(),
+            perturb_seed
+        );
+    }
+    let reader = if several {
+        Some(frames)
+    } else {
+        seq.frames = frames
+            .without_colour()
+            .read_all()
+            .with_context(|| format!("loading {label}"))?;
+        None
+    };
+    Ok(Loaded { label, seq, reader })
+}
+
+/// The system run: the sensor's defaults, overlaid by the `--config` file, with the switches
+/// of the command line; refused when the result is not a valid configuration.
+pub fn system_config(
+    sensor: slam_core::SensorKind,
+    config_file: Option<&Path>,
+    switches: Switches,
+) -> Result<Config> {
+    let mut config = base_config(sensor);
+    if let Some(p) = config_file {
+        config = overlay_file(&config, p)?;
+    }
+    let config = apply_switches(config, switches);
+    config
+        .check()
+        .map_err(|e| anyhow::anyhow!("{e} (from the command line or --config)"))?;
+    Ok(config)
+}
+
+/// Runs `seeds` (one thread each, `jobs` at once) on `loaded` under `config`, a progress bar
+/// per run (and one for the features, extracted once when several runs share them), hidden
+/// when `quiet`.
+pub fn run_seeds(
+    loaded: &Loaded,
+    config: &Config,
+    vocabulary: Option<&Arc<Vocabulary>>,
+    seeds: &[u64],
+    jobs: Option<usize>,
+    quiet: bool,
+) -> Result<Vec<(u64, RunOutcome)>> {
+    let (seq, n_frames) = (&loaded.seq, loaded.frames());
+    let multi = MultiProgress::with_draw_target(if quiet {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    });
+    let style = ProgressStyle::with_template(
+        "{prefix:>10} [{bar:40}] {pos}/{len} frames {per_sec} eta {eta}",
+    )
+    .expect("static template")
+    .progress_chars("=> ");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.unwrap_or(0))
+        .build()
+        .context("starting the worker pool")?;
+    let extracted = match &loaded.reader {
+        Some(frames) => {
+            let bar = multi.add(ProgressBar::new(n_frames as u64));
+            bar.set_style(style.clone());
+            bar.set_prefix("features");
+            let orbs = std::slice::from_ref(&config.orb);
+            let mut e = pool
+                .install(|| {
+                    ExtractedSequence::extract_all(frames, &seq.camera, orbs, || bar.inc(1))
+                })
+                .with_context(|| format!("reading the frames of {}", loaded.label))?;
+            bar.finish_and_clear();
+            Some(e.remove(0))
+        }
+        None => None,
+    };
+    Ok(pool.install(|| {
+        seeds
+            .par_iter()
+            .map(|&seed| {
+                let bar = multi.add(ProgressBar::new(n_frames as u64));
+                bar.set_style(style.clone());
+                bar.set_prefix(format!("seed {seed}"));
+                let mut cfg = config.clone();
+                cfg.seed = seed;
+                let progress = |i: usize| bar.set_position(i as u64);
+                let o = match &extracted {
+                    Some(e) => run_extracted(seq, e, &cfg, vocabulary, progress),
+                    None => run_sequence(seq, &cfg, vocabulary, progress),
+                };
+                bar.finish_and_clear();
+                (seed, o)
+            })
+            .collect()
+    }))
+}
+
+/// Writes each run's files (into `out`, or `out/seed<k>` for several runs, with the
+/// perturbation it ran under) and prints its line; returns the runs' summaries.
+pub fn record(
+    loaded: &Loaded,
+    cname: &str,
+    results: &[(u64, RunOutcome)],
+    chain: &perturb::Chain,
+    perturb_seed: u64,
+    out: &Path,
+) -> Result<Vec<serde_json::Value>> {
+    let label = &loaded.label;
+    let mut summaries = Vec::new();
+    for (seed, o) in results {
+        let dir = if results.len() == 1 {
+            out.to_path_buf()
+        } else {
+            out.join(format!("seed{seed}"))
+        };
+        let mut summary = run_summary(label, cname, *seed, o);
+        summary["perturbation"] = json!(chain.effective().to_string());
+        summary["perturbation_seed"] = json!(perturb_seed);
+        write_run(&dir, &summary, o)?;
+        summaries.push(summary);
+        let ate = o
+            .ate_rmse()
+            .map(|a| format!("{a:.4} m"))
+            .unwrap_or_else(|| "n/a".into());
+        println!(
+            "{label} [{cname}] seed {seed}: ATE RMSE {ate}, tracked {}/{} frames{}, {} keyframes, {} map points, {}, {:.1} fps",
+            o.tracked,
+            o.frames,
+            if o.failed { " (FAILED)" } else { "" },
+            o.keyframes,
+            o.map_points,
+            loops_text(o),
+            o.fps()
+        );
+    }
+    Ok(summaries)
+}
+
+/// Over several runs: prints their mean ATE, its population std and the failures, and writes
+/// them with every run's summary to `out/summary.json`; nothing for a single run.
+pub fn summarise(
+    label: &str,
+    cname: &str,
+    results: &[(u64, RunOutcome)],
+    summaries: Vec<serde_json::Value>,
+    out: &Path,
+) -> Result<()> {
+    if results.len() <= 1 {
+        return Ok(());
+    }
+    let ates: Vec<f64> = results.iter().filter_map(|(_, o)| o.ate_rmse()).collect();
+    let n = ates.len().max(1) as f64;
+    let mean = ates.iter().sum::<f64>() / n;
+    let std = (ates.iter().map(|a| (a - mean) * (a - mean)).sum::<f64>() / n).sqrt();
+    let failures = results.iter().filter(|(_, o)| o.failed).count();
+    println!(
+        "{label} [{cname}] over {} runs: mean ATE {mean:.4} m, std {std:.4} m, {failures} failed",
+        results.len()
+    );
+    let doc = json!({"sequence": label, "config": cname, "runs": summaries, "mean_ate_m": mean, "std_ate_m": std, "failures": failures});
+    write_atomic(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&doc)?.as_bytes(),
+    )?;
+    Ok(())
+}
+
+/// The default output folder of a sequence: `noisefree-out/<label>`.
+pub fn default_out(label: &str) -> PathBuf {
+    PathBuf::from("noisefree-out").join(label)
+}
