@@ -598,9 +598,10 @@ fn table4_findings(md: &mut String, dirs: &[PathBuf], base: &Path) -> Result<()>
             any = true;
             let _ = writeln!(
                 md,
-                "- {}: {}",
+                "- {}: {}{}",
                 link(base, dir, "table4.md"),
-                cells.join("; ")
+                cells.join("; "),
+                fps_tests(dir, base)?
             );
         }
     }
@@ -609,6 +610,49 @@ fn table4_findings(md: &mut String, dirs: &[PathBuf], base: &Path) -> Result<()>
     }
     md.push('\n');
     Ok(())
+}
+
+/// What `table4-versus.csv` in `dir` tests: how many differences in frames per second were
+/// tested and which survive Holm, with their intervals (empty without the file).
+fn fps_tests(dir: &Path, base: &Path) -> Result<String> {
+    let path = dir.join("table4-versus.csv");
+    if !path.is_file() {
+        return Ok(String::new());
+    }
+    let mut rdr = csv::Reader::from_path(&path).with_context(|| path.display().to_string())?;
+    let h = rdr.headers()?.clone();
+    let (mut tested, mut survivors) = (0usize, Vec::new());
+    for rec in rdr.records() {
+        let rec = rec.with_context(|| path.display().to_string())?;
+        let Some(survives) = field(&rec, &h, "survives_holm").filter(|s| !s.is_empty()) else {
+            continue;
+        };
+        tested += 1;
+        if survives == "1" {
+            if let (Some(seq), Some(sys), Some(d), Some(lo), Some(hi)) = (
+                field(&rec, &h, "sequence"),
+                field(&rec, &h, "system"),
+                number(&rec, &h, "diff_pct"),
+                number(&rec, &h, "diff_ci95_lo_pct"),
+                number(&rec, &h, "diff_ci95_hi_pct"),
+            ) {
+                survivors.push(format!(
+                    "{} on {seq} {d:+.1} % [{lo:+.1}, {hi:+.1}]",
+                    heading(&sys)
+                ));
+            }
+        }
+    }
+    Ok(format!(
+        ". In frames per second ({}): {} of {tested} differences survive Holm{}",
+        link(base, dir, "table4-versus.md"),
+        survivors.len(),
+        if survivors.is_empty() {
+            ".".to_string()
+        } else {
+            format!(": {}.", survivors.join("; "))
+        }
+    ))
 }
 
 fn uses_mcor(c: &str) -> bool {

@@ -84,6 +84,15 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
     index.push(("table4".into(), "Table IV: frames per second".into()));
     all.push('\n');
     all.push_str(&t4.markdown);
+    if let Some(v) = crate::report::fps::fps_versus(&records, catalog, &labels) {
+        write_table(dir, "table4-versus", &v)?;
+        index.push((
+            "table4-versus".into(),
+            "Table IV: each system's frames per second against the baseline, with intervals".into(),
+        ));
+        all.push('\n');
+        all.push_str(&v.markdown);
+    }
     if let Some(l) = loops_table(&records, catalog, &labels) {
         write_table(dir, "loops", &l)?;
         index.push((

@@ -8,6 +8,7 @@ pub mod ablation;
 pub mod figures;
 pub mod findings;
 pub mod folder;
+pub mod fps;
 pub mod markdown;
 pub mod resilience;
 pub mod stats;

@@ -790,7 +790,10 @@ pub fn table4(
             row.push(if runs.is_empty() {
                 "-".into()
             } else {
-                format!("{:.1}", Cell::of(&runs).fps)
+                crate::report::fps::fps_summary(records, &seq, k.name()).map_or_else(
+                    || format!("{:.1}", Cell::of(&runs).fps),
+                    |s| crate::report::fps::fps_cell(&s),
+                )
             });
         }
         for (name, _) in &systems {
@@ -822,11 +825,15 @@ pub fn table4(
         rows.push(row);
     }
     let notes = if systems.is_empty() {
-        "Wall-clock frames per second of one run on one core, averaged over the runs; runs of a sweep \
-         share the machine's cores, so compare columns within one sweep."
+        "Wall-clock frames per second of one run on one core, averaged over the runs, with the \
+         95 % interval of the mean (Student's t) where the runs spread; runs of a sweep share \
+         the machine's cores, so compare columns within one sweep; each technique against the \
+         baseline in table4-versus.md."
             .to_string()
     } else {
-        "Wall-clock frames per second of one run, averaged over the runs; ours on one core. An \
+        "Wall-clock frames per second of one run, averaged over the runs (ours with the 95 % \
+         interval of the mean where the runs spread; each technique against the baseline in \
+         table4-versus.md); ours on one core. An \
          external system's figure is its whole process from start to exit (loading its vocabulary, \
          and any real-time pacing of its example program, included), with the cores it kept busy \
          on average (CPU time / wall time) and its peak resident memory; runs of a sweep share \

@@ -20,9 +20,10 @@ use std::collections::BTreeMap;
 pub const ALPHA: f64 = 0.05;
 
 /// The key that makes two runs a pair: same SLAM seed, perturbation draw and synthetic scene.
-type PairKey = (u64, Option<u64>, Option<u64>);
+pub type PairKey = (u64, Option<u64>, Option<u64>);
 
-fn pair_key(r: &RunRecord) -> PairKey {
+/// The pair key of a run.
+pub fn pair_key(r: &RunRecord) -> PairKey {
     (r.seed, r.perturb_seed, r.synth_seed)
 }
 
@@ -491,7 +492,7 @@ fn write_csv(rows: &[Vec<String>]) -> String {
 }
 
 /// A p-value as a table prints it: three significant digits, `< 1e-6` below.
-fn p_text(p: f64) -> String {
+pub fn p_text(p: f64) -> String {
     if p < 1e-6 {
         "< 1e-6".into()
     } else if p < 0.001 {
@@ -502,10 +503,12 @@ fn p_text(p: f64) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn record(
+    /// A run of `config` on `seq` with the given seed, ATE and perturbation point (a test
+    /// record the report's other tests build on).
+    pub(crate) fn record(
         seq: &str,
         config: &str,
         seed: u64,
