@@ -8,7 +8,7 @@
 use crate::columns::ConfigKind;
 use crate::report::markdown::{render, system_label, Rendered};
 use crate::report::stats::{holm, summarize, Comparison, Summary};
-use crate::report::tables::{is_default, sequence_order};
+use crate::report::tables::{fps_cell, is_default, sequence_order};
 use crate::report::versus::{compare, p_text, pair_key, PairKey, ALPHA};
 use crate::sweep::store::RunRecord;
 use datasets::Catalog;
@@ -29,21 +29,6 @@ fn fps_of(records: &[RunRecord], seq: &str, config: &str) -> BTreeMap<PairKey, f
         .filter(|r| r.sequence == seq && r.config == config && is_default(r))
         .map(|r| (pair_key(r), r.fps))
         .collect()
-}
-
-/// The summary of frames per second (n, mean, std, median, 95 % interval) of our runs of
-/// `config` on `seq`, `None` without runs: Table IV's cells.
-pub fn fps_summary(records: &[RunRecord], seq: &str, config: &str) -> Option<Summary> {
-    let v: Vec<f64> = fps_of(records, seq, config).into_values().collect();
-    summarize(&v)
-}
-
-/// A Table IV cell: the mean frames per second with its 95 % interval when the runs spread.
-pub fn fps_cell(s: &Summary) -> String {
-    match s.ci95 {
-        Some((lo, hi)) if hi > lo => format!("{:.1} [{:.1}, {:.1}]", s.mean, lo, hi),
-        _ => format!("{:.1}", s.mean),
-    }
 }
 
 /// Each of our techniques against the baseline in frames per second, one row per sequence and
@@ -242,7 +227,7 @@ mod tests {
         assert!(t.markdown.contains("**+10.0 % ["), "{}", t.markdown);
         assert!(t.markdown.contains("2 comparisons in this table"));
         // The Table IV cell carries the interval of the mean.
-        let s = fps_summary(&records, "kinect", "orb").unwrap();
+        let s = crate::report::tables::fps_summary(&records, "kinect", "orb").unwrap();
         assert!(fps_cell(&s).starts_with("100.0 ["), "{}", fps_cell(&s));
     }
 }

@@ -7,6 +7,7 @@
 //! system, parameters) with numbers, not text (n, failed, mean, std, median, min, max, fps).
 
 use crate::report::markdown::{column_name, render, system_label, Rendered};
+use crate::report::stats::{summarize, Summary};
 use crate::sweep::plan::ConfigKind;
 use crate::sweep::store::{FolderSettings, RunRecord};
 use datasets::{Catalog, Class};
@@ -760,6 +761,25 @@ pub fn table1(
     Some(t)
 }
 
+/// The frames per second (n, mean, std, median, 95 % interval) of our runs of `config` on
+/// `seq` with Table III's parameters, `None` without runs: Table IV's cells.
+pub fn fps_summary(records: &[RunRecord], seq: &str, config: &str) -> Option<Summary> {
+    let v: Vec<f64> = records
+        .iter()
+        .filter(|r| r.sequence == seq && r.config == config && is_default(r))
+        .map(|r| r.fps)
+        .collect();
+    summarize(&v)
+}
+
+/// A Table IV cell: the mean frames per second with its 95 % interval when the runs spread.
+pub fn fps_cell(s: &Summary) -> String {
+    match s.ci95 {
+        Some((lo, hi)) if hi > lo => format!("{:.1} [{:.1}, {:.1}]", s.mean, lo, hi),
+        _ => format!("{:.1}", s.mean),
+    }
+}
+
 /// Table IV: mean frames per second per sequence and configuration (one thread).
 pub fn table4(
     records: &[RunRecord],
@@ -790,10 +810,8 @@ pub fn table4(
             row.push(if runs.is_empty() {
                 "-".into()
             } else {
-                crate::report::fps::fps_summary(records, &seq, k.name()).map_or_else(
-                    || format!("{:.1}", Cell::of(&runs).fps),
-                    |s| crate::report::fps::fps_cell(&s),
-                )
+                fps_summary(records, &seq, k.name())
+                    .map_or_else(|| format!("{:.1}", Cell::of(&runs).fps), |s| fps_cell(&s))
             });
         }
         for (name, _) in &systems {
