@@ -285,17 +285,10 @@ fn table3_sweeps_every_row_that_has_a_twin_under_five_columns() {
         .map(|e| e.name.as_str())
         .collect();
     assert_eq!(rows.len(), 31, "Table III: 20 TUM and 11 EuRoC rows");
-    let twin_of = |row: &str| {
-        catalog
-            .entries()
-            .iter()
-            .find(|t| t.is_synthetic() && t.imitates.as_deref() == Some(row))
-            .map(|t| t.name.clone())
-    };
     let missing: Vec<&str> = rows
         .iter()
         .copied()
-        .filter(|r| twin_of(r).is_none())
+        .filter(|r| catalog.twin_of(r).is_none())
         .collect();
     let twins = rows.len() - missing.len();
     assert!(twins >= 13, "{twins}");

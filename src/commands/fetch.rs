@@ -58,9 +58,7 @@ fn write_list(out: &mut impl std::io::Write, catalog: &Catalog, root: &std::path
                 "-".to_string()
             } else {
                 catalog
-                    .entries()
-                    .iter()
-                    .find(|t| t.imitates.as_deref() == Some(e.name.as_str()))
+                    .twin_of(&e.name)
                     .map_or_else(|| "-".to_string(), |t| t.name.clone())
             };
             [e.name.clone(), class, twin, state]

@@ -7,9 +7,11 @@
 
 use crate::columns::ConfigKind;
 use crate::report::markdown::{render, system_label, Rendered};
-use crate::report::stats::{holm, summarize, Comparison, Summary};
-use crate::report::tables::{fps_cell, is_default, sequence_order};
-use crate::report::versus::{compare, p_text, pair_key, PairKey, ALPHA};
+use crate::report::stats::{summarize, Comparison, Summary};
+use crate::report::tables::{fps_cell, our_runs, sequence_order};
+use crate::report::versus::{
+    compare, difference_text, holm_where_tested, p_text, pair_key, PairKey, ALPHA,
+};
 use crate::sweep::store::RunRecord;
 use datasets::Catalog;
 use std::collections::BTreeMap;
@@ -24,9 +26,8 @@ struct Row {
 
 /// Our runs of `config` on `seq` with the default parameters, frames per second by pair key.
 fn fps_of(records: &[RunRecord], seq: &str, config: &str) -> BTreeMap<PairKey, f64> {
-    records
-        .iter()
-        .filter(|r| r.sequence == seq && r.config == config && is_default(r))
+    our_runs(records, seq, config)
+        .into_iter()
         .map(|r| (pair_key(r), r.fps))
         .collect()
 }
@@ -61,15 +62,8 @@ pub fn fps_versus(
     if !rows.iter().any(|r| r.config != "orb") {
         return None;
     }
-    let tested: Vec<f64> = rows
-        .iter()
-        .filter_map(|r| r.comparison.map(|c| c.p))
-        .collect();
-    let mut adjusted = holm(&tested).into_iter();
-    let p_holm: Vec<Option<f64>> = rows
-        .iter()
-        .map(|r| r.comparison.and_then(|_| adjusted.next()))
-        .collect();
+    let p_holm = holm_where_tested(rows.iter().map(|r| r.comparison.as_ref()));
+    let tested = p_holm.iter().flatten().count();
     let header: Vec<String> = [
         "sequence",
         "system",
@@ -108,15 +102,7 @@ pub fn fps_versus(
         let versus = match (&r.comparison, r.config) {
             (_, "orb") => "(baseline)".to_string(),
             (None, _) => "runs identical: no test".to_string(),
-            (Some(c), _) => {
-                let (lo, hi) = c.relative_ci95_pct();
-                let t = format!("{:+.1} % [{:+.1}, {:+.1}]", c.relative_pct(), lo, hi);
-                if survives {
-                    format!("**{t}**")
-                } else {
-                    t
-                }
-            }
+            (Some(c), _) => difference_text(c, survives),
         };
         md_rows.push(vec![
             r.sequence.clone(),
@@ -166,7 +152,7 @@ pub fn fps_versus(
          where both ran the same seeds and draws, Welch's otherwise. {} comparisons in this \
          table, Holm-corrected together; **bold** survives at 0.05. Runs of a sweep share the \
          machine's cores, so these compare columns of one sweep, not machines.",
-        tested.len()
+        tested
     );
     let mut t = render(
         "Table IV: each system's frames per second against the baseline",
@@ -227,7 +213,8 @@ mod tests {
         assert!(t.markdown.contains("**+10.0 % ["), "{}", t.markdown);
         assert!(t.markdown.contains("2 comparisons in this table"));
         // The Table IV cell carries the interval of the mean.
-        let s = crate::report::tables::fps_summary(&records, "kinect", "orb").unwrap();
+        let runs = our_runs(&records, "kinect", "orb");
+        let s = crate::report::tables::fps_summary(&runs).unwrap();
         assert!(fps_cell(&s).starts_with("100.0 ["), "{}", fps_cell(&s));
     }
 }

@@ -453,10 +453,7 @@ fn table3_row(
     ];
     let mut cells: Vec<Option<Cell>> = Vec::new();
     for k in kinds {
-        let runs: Vec<&RunRecord> = records
-            .iter()
-            .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
-            .collect();
+        let runs: Vec<&RunRecord> = our_runs(records, seq, k.name());
         cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
     }
     for (name, _) in systems {
@@ -761,15 +758,22 @@ pub fn table1(
     Some(t)
 }
 
-/// The frames per second (n, mean, std, median, 95 % interval) of our runs of `config` on
-/// `seq` with Table III's parameters, `None` without runs: Table IV's cells.
-pub fn fps_summary(records: &[RunRecord], seq: &str, config: &str) -> Option<Summary> {
-    let v: Vec<f64> = records
+/// Our runs of `config` on `seq` with the parameters Table III reports, in record order.
+pub(crate) fn our_runs<'a>(
+    records: &'a [RunRecord],
+    seq: &str,
+    config: &str,
+) -> Vec<&'a RunRecord> {
+    records
         .iter()
         .filter(|r| r.sequence == seq && r.config == config && is_default(r))
-        .map(|r| r.fps)
-        .collect();
-    summarize(&v)
+        .collect()
+}
+
+/// The frames per second (n, mean, std, median, 95 % interval) of `runs`, `None` without
+/// runs: Table IV's cells.
+pub fn fps_summary(runs: &[&RunRecord]) -> Option<Summary> {
+    summarize(&runs.iter().map(|r| r.fps).collect::<Vec<_>>())
 }
 
 /// A Table IV cell: the mean frames per second with its 95 % interval when the runs spread.
@@ -803,16 +807,8 @@ pub fn table4(
             .unwrap_or(0);
         let mut row = vec![seq.clone(), frames.to_string()];
         for k in &kinds {
-            let runs: Vec<&RunRecord> = records
-                .iter()
-                .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
-                .collect();
-            row.push(if runs.is_empty() {
-                "-".into()
-            } else {
-                fps_summary(records, &seq, k.name())
-                    .map_or_else(|| format!("{:.1}", Cell::of(&runs).fps), |s| fps_cell(&s))
-            });
+            let runs: Vec<&RunRecord> = our_runs(records, &seq, k.name());
+            row.push(fps_summary(&runs).map_or_else(|| "-".into(), |s| fps_cell(&s)));
         }
         for (name, _) in &systems {
             let runs: Vec<&RunRecord> = records
@@ -890,10 +886,7 @@ pub fn loops_table(
     for seq in sequence_order(records, catalog) {
         let mut row = vec![seq.clone()];
         for k in &kinds {
-            let runs: Vec<&RunRecord> = records
-                .iter()
-                .filter(|r| r.sequence == seq && r.config == k.name() && is_default(r))
-                .collect();
+            let runs: Vec<&RunRecord> = our_runs(records, &seq, k.name());
             let counted: Vec<usize> = runs.iter().filter_map(|r| r.loops).collect();
             row.push(if counted.is_empty() {
                 "-".into()

@@ -280,17 +280,33 @@ pub fn versus_baseline(
     if !rows.iter().any(|r| r.config != "orb") {
         return None;
     }
-    let p: Vec<f64> = rows
-        .iter()
-        .filter_map(|r| r.comparison.map(|c| c.p))
-        .collect();
-    let adjusted = holm(&p);
-    let mut adj = adjusted.iter();
-    let p_holm: Vec<Option<f64>> = rows
-        .iter()
-        .map(|r| r.comparison.and_then(|_| adj.next().copied()))
-        .collect();
-    Some(render_rows(&rows, &p_holm, p.len(), paper, labels))
+    let p_holm = holm_where_tested(rows.iter().map(|r| r.comparison.as_ref()));
+    let tested = p_holm.iter().flatten().count();
+    Some(render_rows(&rows, &p_holm, tested, paper, labels))
+}
+
+/// Holm's correction over the rows of one table that were tested: each tested row's adjusted
+/// p in row order, `None` where nothing was tested.
+pub fn holm_where_tested<'a>(
+    comparisons: impl Iterator<Item = Option<&'a Comparison>> + Clone,
+) -> Vec<Option<f64>> {
+    let p: Vec<f64> = comparisons.clone().flatten().map(|c| c.p).collect();
+    let mut adjusted = holm(&p).into_iter();
+    comparisons
+        .map(|c| c.and_then(|_| adjusted.next()))
+        .collect()
+}
+
+/// A difference against the baseline as the tables print it, `+1.2 % [-0.3, +2.7]`, in bold
+/// when it survives Holm's correction.
+pub fn difference_text(c: &Comparison, survives: bool) -> String {
+    let (lo, hi) = c.relative_ci95_pct();
+    let t = format!("{:+.1} % [{:+.1}, {:+.1}]", c.relative_pct(), lo, hi);
+    if survives {
+        format!("**{t}**")
+    } else {
+        t
+    }
 }
 
 fn render_rows(
@@ -341,15 +357,7 @@ fn render_rows(
                     "-".into()
                 }
             },
-            |c| {
-                let (lo, hi) = c.relative_ci95_pct();
-                let t = format!("{:+.1} % [{:+.1}, {:+.1}]", c.relative_pct(), lo, hi);
-                if survives {
-                    format!("**{t}**")
-                } else {
-                    t
-                }
-            },
+            |c| difference_text(&c, survives),
         );
         let mut row = vec![
             r.sequence.clone(),

@@ -351,8 +351,9 @@ pub fn sweep(req: &SweepRequest, catalog: &Catalog) -> Result<Summary> {
             if progress.exhausted() {
                 break;
             }
-            let mut rz = prepare_realization(&cx, src, label, synth_seed, &jobs)?;
-            for (point, jobs) in points_of(jobs) {
+            let points = points_of(jobs);
+            let mut rz = prepare_realization(&cx, src, label, synth_seed, &points)?;
+            for (point, jobs) in points {
                 if progress.exhausted() {
                     break;
                 }
@@ -370,17 +371,28 @@ pub fn sweep(req: &SweepRequest, catalog: &Catalog) -> Result<Summary> {
 
 /// Jobs of one realization grouped by perturbation point in job order (one group, `None`, in
 /// a sweep without perturbations).
-fn points_of(jobs: Vec<&Job>) -> Vec<(Option<PerturbPoint>, Vec<&Job>)> {
-    let mut out: Vec<(Option<PerturbPoint>, Vec<&Job>)> = Vec::new();
-    let key = |p: &Option<PerturbPoint>| p.as_ref().map(|p| (p.chain.to_string(), p.seed));
+fn points_of(jobs: Vec<&Job>) -> Vec<PointJobs<'_>> {
+    // A point is its printed chain and its draw, each job's key made once.
+    let mut keys: Vec<Option<(String, u64)>> = Vec::new();
+    let mut out: Vec<PointJobs<'_>> = Vec::new();
     for j in jobs {
-        match out.iter_mut().find(|(k, _)| key(k) == key(&j.perturbation)) {
-            Some((_, v)) => v.push(j),
-            None => out.push((j.perturbation.clone(), vec![j])),
+        let key = j
+            .perturbation
+            .as_ref()
+            .map(|p| (p.chain.to_string(), p.seed));
+        match keys.iter().position(|k| *k == key) {
+            Some(i) => out[i].1.push(j),
+            None => {
+                keys.push(key);
+                out.push((j.perturbation.clone(), vec![j]));
+            }
         }
     }
     out
 }
+
+/// A perturbation point (`None`: unperturbed) and its jobs.
+type PointJobs<'a> = (Option<PerturbPoint>, Vec<&'a Job>);
 
 /// Decoded frames a sweep may keep in memory to read them once for all its perturbation points.
 const FRAME_MEMORY_BUDGET: usize = 3 << 30;
@@ -419,8 +431,12 @@ pub fn prepare_realization<'a>(
     src: &'a Source,
     label: &'a str,
     synth_seed: Option<u64>,
-    jobs: &[&Job],
+    points: &[PointJobs<'_>],
 ) -> Result<Realization<'a>> {
+    let jobs: Vec<&Job> = points
+        .iter()
+        .flat_map(|(_, js)| js.iter().copied())
+        .collect();
     let req = cx.req;
     let opts = LoadOptions {
         synth_seed: synth_seed.unwrap_or(req.synth_seed),
@@ -436,8 +452,7 @@ pub fn prepare_realization<'a>(
             gt,
         )?;
     }
-    let points = points_of(jobs.to_vec()).len();
-    let frames = if points > 1 {
+    let frames = if points.len() > 1 {
         let (w, h) = (seq.camera.width as usize, seq.camera.height as usize);
         remembering(frames, w * h * 8, FRAME_MEMORY_BUDGET)
     } else {
@@ -508,7 +523,7 @@ pub fn run_point(
                 &frames,
                 chain,
                 pseed,
-                &cx.progress.multi,
+                cx.progress,
             )?;
             perturbed_src = Source::Path(folder);
             &perturbed_src

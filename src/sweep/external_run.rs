@@ -416,7 +416,7 @@ pub fn perturbed_folder(
     frames: &datasets::FrameReader,
     chain: &perturb::Chain,
     seed: u64,
-    multi: &indicatif::MultiProgress,
+    progress: &Progress,
 ) -> Result<PathBuf> {
     let realization = match src {
         Source::Catalog(name) if catalog.get(name).is_ok_and(|e| e.preset.is_some()) => {
@@ -442,13 +442,11 @@ pub fn perturbed_folder(
             src.label(),
             frames.len()
         );
-        multi.suspend(|| {
-            eprintln!(
-                "writing {} perturbed by {chain} for external systems to {}",
-                src.label(),
-                folder.display()
-            )
-        });
+        progress.note(&format!(
+            "writing {} perturbed by {chain} for external systems to {}",
+            src.label(),
+            folder.display()
+        ));
         let written =
             perturb::write_folder(seq, frames, &folder, &note, source_dir.as_deref(), |_| {});
         if !folder.is_dir() {

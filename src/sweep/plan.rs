@@ -207,11 +207,7 @@ pub fn table3_twins(catalog: &datasets::Catalog) -> (Vec<String>, Vec<String>) {
         .iter()
         .filter(|e| !e.is_synthetic() && e.paper.is_some())
     {
-        match catalog
-            .entries()
-            .iter()
-            .find(|t| t.is_synthetic() && t.imitates.as_deref() == Some(row.name.as_str()))
-        {
+        match catalog.twin_of(&row.name) {
             Some(t) => twins.push(t.name.clone()),
             None => missing.push(row.name.clone()),
         }

@@ -311,6 +311,13 @@ impl Catalog {
         self.entries.iter().filter(move |e| e.format == format)
     }
 
+    /// The synthetic twin that imitates the real sequence `name` (its short name), if any.
+    pub fn twin_of(&self, name: &str) -> Option<&Entry> {
+        self.entries
+            .iter()
+            .find(|t| t.is_synthetic() && t.imitates.as_deref() == Some(name))
+    }
+
     /// Looks a sequence up by short name, paper spelling, full name or folder (case-insensitive).
     /// An unknown name fails with the closest names by edit distance.
     pub fn get(&self, name: &str) -> Result<&Entry, DatasetError> {
