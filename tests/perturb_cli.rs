@@ -660,3 +660,77 @@ fn a_perturbation_sweep_pairs_its_draws_by_run_unless_shared() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--frames`, `--synth-seed` and `--synth-without` are one argument group that `synth`'s
+/// siblings share: `perturb` at level 0 of an ablated synthetic sequence writes the depth
+/// `synth` writes for the same ablation, names the ablation in its note, and refuses an
+/// unknown effect as `run` does.
+#[test]
+fn perturb_takes_the_shared_synthetic_flags_as_synth_and_run_do() {
+    let dir = tmpdir("perturb-shared-flags");
+    let (synth_out, perturbed) = (dir.join("synth"), dir.join("perturbed"));
+    noisefree_ok(&[
+        "synth",
+        "--preset",
+        "kinect",
+        "--frames",
+        "3",
+        "--seed",
+        "2",
+        "--synth-without",
+        "axial,lateral",
+        "--out",
+        synth_out.to_str().unwrap(),
+    ]);
+    noisefree_ok(&[
+        "perturb",
+        "--seq",
+        "kinect",
+        "--frames",
+        "3",
+        "--synth-seed",
+        "2",
+        "--synth-without",
+        "axial,lateral",
+        "--perturb",
+        "depth-axial:0",
+        "-o",
+        perturbed.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let depth_files = |d: &Path| -> Vec<Vec<u16>> {
+        let list = std::fs::read_to_string(d.join("depth.txt")).unwrap();
+        list.lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(|l| {
+                let file = d.join(l.split_whitespace().nth(1).unwrap());
+                image::open(file).unwrap().into_luma16().into_raw()
+            })
+            .collect()
+    };
+    let (a, b) = (depth_files(&synth_out), depth_files(&perturbed));
+    assert_eq!(a.len(), 3);
+    assert!(
+        a == b,
+        "the ablated depth differs between synth and perturb"
+    );
+    let note = std::fs::read_to_string(perturbed.join("perturbation.txt")).unwrap();
+    assert!(note.contains("synth_without axial,lateral\n"), "{note}");
+    for command in ["perturb", "run"] {
+        let out = noisefree(&[
+            command,
+            "--seq",
+            "kinect",
+            "--frames",
+            "2",
+            "--synth-without",
+            "no-such-effect",
+            "--perturb",
+            "depth-axial:0",
+            "--out",
+            dir.join(command).to_str().unwrap(),
+        ]);
+        assert_clean_failure(&out, "no-such-effect");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

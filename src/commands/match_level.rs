@@ -2,11 +2,12 @@
 //! median ATE on a sequence equals a target, by bisection, each step printed; `match.json`
 //! and `match.csv` (every run of every step) written to `--out`.
 
+use crate::commands::shared_args::SequenceArgs;
 use crate::config_file::{base_config, overlay_file};
 use crate::difficulty::request::{self, mm};
 use crate::difficulty::{bisect, LevelOutcome, MatchSetup};
 use crate::runner::remembering;
-use crate::select::{open, LoadOptions, Source};
+use crate::select::{open, Source};
 use anyhow::{bail, Context, Result};
 use perturb::Subject;
 use std::path::PathBuf;
@@ -43,21 +44,15 @@ pub struct MatchArgs {
     /// Stop when the median is within this share of the target.
     #[arg(long, default_value_t = 0.05, value_name = "SHARE")]
     pub tolerance: f64,
-    /// Synthetic sequences: number of frames; real ones: only the first N frames.
-    #[arg(long, value_name = "N")]
-    pub frames: Option<usize>,
-    /// Seed of a synthetic sequence's scene and noise.
-    #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
-    pub synth_seed: u64,
     /// TOML configuration overlaid on the baseline's defaults (MC-OR and AVC stay as it says).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Parallel runs at once [default: all cores].
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
-    /// Data root for catalogued real sequences [default: $NOISEFREE_DATA, else ./data].
-    #[arg(long = "data-dir", value_name = "DIR")]
-    pub data_dir: Option<PathBuf>,
+    /// The sequence's length, synthetic seed and ablated effects, and the data root.
+    #[command(flatten)]
+    pub sequence: SequenceArgs,
     /// Where `match.json` and `match.csv` go [default: noisefree-out/match-<sequence>].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -86,13 +81,7 @@ pub fn run(args: MatchArgs) -> Result<()> {
     let subject = request::subject_of(args.chain.as_deref(), imitated, &label)?;
     let target = request::target_of(&args.target, imitated, &label)?;
     let high = request::highest_level(subject, args.max_level)?;
-    let opts = LoadOptions {
-        data_dir: datasets::data_root(args.data_dir.as_deref()),
-        frames: args.frames,
-        synth_seed: args.synth_seed,
-        synth_without: Vec::new(),
-        camera: None,
-    };
+    let opts = args.sequence.load_options(None);
     let (seq, frames) = open(&source, &catalog, &opts)?;
     // Refused before anything runs: a family that does not fit the sequence.
     perturb::perturb_sequence(&seq, frames.clone(), &perturb::Chain(subject.at(high)), 0)

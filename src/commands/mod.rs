@@ -1,4 +1,5 @@
-//! One module per subcommand: its clap arguments and its `run` function.
+//! One module per subcommand: its clap arguments and its `run` function; `shared_args` holds
+//! the argument groups several of them flatten in.
 
 pub mod analyze;
 pub mod bench;
@@ -12,6 +13,7 @@ pub mod regress;
 pub mod report;
 pub mod run;
 pub mod settings;
+pub mod shared_args;
 pub mod sweep;
 pub mod synth;
 pub mod table;

@@ -3,7 +3,8 @@
 //! ORB-SLAM2 / ORB-SLAM3 settings beside it, and optionally a contact sheet (input | perturbed |
 //! perturbed depth or right image) of four frames.
 
-use crate::select::{open, LoadOptions, Source};
+use crate::commands::shared_args::SequenceArgs;
+use crate::select::{open, Source};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use perturb::{perturb_sequence, Chain, Domain, Family, NamedChain};
@@ -40,15 +41,9 @@ pub struct PerturbArgs {
     /// image (stereo), four frames spread over the sequence.
     #[arg(long = "contact-sheet", value_name = "FILE.png")]
     pub contact_sheet: Option<PathBuf>,
-    /// Synthetic sequences: number of frames; real ones: only the first N frames.
-    #[arg(long, value_name = "N")]
-    pub frames: Option<usize>,
-    /// Seed of a synthetic sequence's scene and noise.
-    #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
-    pub synth_seed: u64,
-    /// Data root for catalogued real sequences [default: $NOISEFREE_DATA, else ./data].
-    #[arg(long = "data-dir", value_name = "DIR")]
-    pub data_dir: Option<PathBuf>,
+    /// The sequence's length, synthetic seed and ablated effects, and the data root.
+    #[command(flatten)]
+    pub sequence: SequenceArgs,
     /// List the perturbation families, their units and valid levels, and exit.
     #[arg(long)]
     pub list: bool,
@@ -124,13 +119,7 @@ pub fn run(args: PerturbArgs) -> Result<()> {
         );
     }
     let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
-    let opts = LoadOptions {
-        data_dir: datasets::data_root(args.data_dir.as_deref()),
-        frames: args.frames,
-        synth_seed: args.synth_seed,
-        synth_without: Vec::new(),
-        camera: args.camera.clone(),
-    };
+    let opts = args.sequence.load_options(args.camera.clone());
     let catalog = datasets::Catalog::embedded();
     let (seq, input) = open(&source, &catalog, &opts)?;
     let (seq, frames) = perturb_sequence(&seq, input.clone(), &chain, args.perturb_seed)
@@ -146,14 +135,19 @@ pub fn run(args: PerturbArgs) -> Result<()> {
             .progress_chars("=> "),
     );
     bar.set_prefix("perturb");
+    // The synthetic ablation is named only when there is one (earlier notes had no such line).
+    let without = match args.sequence.synth_without.as_slice() {
+        [] => String::new(),
+        effects => format!("synth_without {}\n", effects.join(",")),
+    };
     let note = format!(
-        "source {}\nperturbation {}\napplied {}\nperturbation_seed {}\nframes {}\nsynth_seed {}\nwritten by noisefree {}",
+        "source {}\nperturbation {}\napplied {}\nperturbation_seed {}\nframes {}\nsynth_seed {}\n{without}written by noisefree {}",
         source.label(),
         args.perturb.as_deref().unwrap_or("none").trim(),
         chain.effective(),
         args.perturb_seed,
         frames.len(),
-        args.synth_seed,
+        args.sequence.synth_seed,
         env!("CARGO_PKG_VERSION")
     );
     // A perturbed ground truth is written from memory, not copied from the source.

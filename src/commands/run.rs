@@ -2,9 +2,10 @@
 //! synthetic default), n seeded runs in parallel, writing each run's TUM trajectory, per-frame
 //! CSV and a JSON summary, and printing the ATE where ground truth exists.
 
+use crate::commands::shared_args::{SequenceArgs, SystemArgs};
 use crate::config_file::{config_name, Switches};
 use crate::seeded_runs::{self, load, record, run_seeds, summarise, system_config};
-use crate::select::{LoadOptions, Source};
+use crate::select::Source;
 use anyhow::{bail, Context, Result};
 use slam_core::system::ClusterViews;
 use std::path::PathBuf;
@@ -27,20 +28,9 @@ pub struct RunArgs {
     /// one its name (TUM) or sensor.yaml files (EuRoC) imply; `noisefree settings` writes one.
     #[arg(long, value_name = "FILE.yaml", requires = "path")]
     pub camera: Option<PathBuf>,
-    /// TOML configuration overlaid on the sensor's defaults (any subset of the fields).
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Place-recognition vocabulary: a DBoW2 text file (ORB-SLAM2's ORBvoc.txt) or a noisefree
-    /// binary one, or `none` for brute-force relocalization and matching [default: the config
-    /// file's `vocabulary`, else the built-in assets/vocabulary/noisefree-k10L5.voc].
-    #[arg(long, value_name = "FILE|none")]
-    pub vocabulary: Option<PathBuf>,
-    /// Emulate ORB-SLAM2's concurrent local mapping: each keyframe is mapped up to N frames
-    /// late (seeded), so runs with different --seed spread as ORB-SLAM2's do [default: 0,
-    /// synchronous as in the paper's protocol: runs of one sequence differ only where
-    /// relocalization's RANSAC draws].
-    #[arg(long = "mapping-lag", value_name = "N")]
-    pub mapping_lag: Option<u32>,
+    /// The system's settings file, vocabulary, mapping lag and loop closing.
+    #[command(flatten)]
+    pub system: SystemArgs,
     /// Seed of the first run; run k uses seed + k.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -66,28 +56,12 @@ pub struct RunArgs {
     /// Turn on AVC (paper III-B) with its default baseline (0.09 m).
     #[arg(long)]
     pub avc: bool,
-    /// Turn loop closing off (an ablation: ORB-SLAM2, and so the baseline, closes loops).
-    /// Loop closing needs a vocabulary; with --vocabulary none it is off anyway.
-    #[arg(long = "no-loop-closing")]
-    pub no_loop_closing: bool,
     /// Output folder [default: noisefree-out/<sequence>].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Synthetic sequences: number of frames (default 300); real ones: only the first N frames.
-    #[arg(long, value_name = "N")]
-    pub frames: Option<usize>,
-    /// Seed of a synthetic sequence's scene and noise (independent of --seed).
-    #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
-    pub synth_seed: u64,
-    /// Synthetic sequences: effects to switch off, comma-separated (an ablation): lens, blur,
-    /// rolling_shutter, vignetting, auto_exposure, sensor_noise, image_noise, tremor, depth_lag,
-    /// axial, quantisation, lateral, holes, misregistration, depth_distortion, mocap_noise,
-    /// layout, stamp_jitter, mocap_clock.
-    #[arg(long = "synth-without", value_name = "EFFECTS", value_delimiter = ',')]
-    pub synth_without: Vec<String>,
-    /// Data root for catalogued real sequences [default: $NOISEFREE_DATA, else ./data].
-    #[arg(long = "data-dir", value_name = "DIR")]
-    pub data_dir: Option<PathBuf>,
+    /// The sequence's length, synthetic seed and ablated effects, and the data root.
+    #[command(flatten)]
+    pub sequence: SequenceArgs,
     /// Catalog file [default: the datasets.toml compiled into the binary].
     #[arg(long, value_name = "FILE")]
     pub catalog: Option<PathBuf>,
@@ -118,13 +92,7 @@ pub fn run(args: RunArgs) -> Result<()> {
     // Checked before anything is read.
     let chain =
         perturb::Chain::parse(args.perturb.as_deref().unwrap_or("")).context("--perturb")?;
-    let opts = LoadOptions {
-        data_dir: datasets::data_root(args.data_dir.as_deref()),
-        frames: args.frames,
-        synth_seed: args.synth_seed,
-        synth_without: args.synth_without.clone(),
-        camera: args.camera.clone(),
-    };
+    let opts = args.sequence.load_options(args.camera.clone());
     // Several runs share every frame's features, extracted once as the frames are read; a
     // single run decodes the sequence and extracts as it tracks.
     let loaded = load(
@@ -140,13 +108,17 @@ pub fn run(args: RunArgs) -> Result<()> {
     let switches = Switches {
         mcor: args.mcor,
         avc: args.avc,
-        mapping_lag: args.mapping_lag,
-        no_loop_closing: args.no_loop_closing,
+        mapping_lag: args.system.mapping_lag,
+        no_loop_closing: args.system.no_loop_closing,
         mcor_cluster: args.mcor_cluster,
         rc: args.rc,
     };
-    let config = system_config(loaded.seq.camera.sensor, args.config.as_deref(), switches)?;
-    let vocab_flag = match (&args.vocabulary, &args.config) {
+    let config = system_config(
+        loaded.seq.camera.sensor,
+        args.system.config.as_deref(),
+        switches,
+    )?;
+    let vocab_flag = match (&args.system.vocabulary, &args.system.config) {
         (Some(v), _) => Some(v.clone()),
         (None, Some(c)) => crate::config_file::vocabulary_in_file(c)?,
         (None, None) => None,

@@ -2,6 +2,7 @@
 //! (one thread per run), each finished run appended to `<out>/runs.csv` at once, resumable,
 //! and shardable over a cluster's job array.
 
+use crate::commands::shared_args::{SequenceArgs, SystemArgs};
 use crate::external::system::{systems_in_file, SystemDef};
 use crate::select::Source;
 use crate::sweep::execute::SweepRequest;
@@ -76,38 +77,13 @@ pub struct SweepArgs {
     /// SLURM_ARRAY_TASK_COUNT when set, else everything.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
-    /// TOML configuration overlaid on the defaults of every run.
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Place-recognition vocabulary: a DBoW2 text file (ORB-SLAM2's ORBvoc.txt) or a noisefree
-    /// binary one, or `none` for brute-force relocalization and matching [default: the config
-    /// file's `vocabulary`, else the built-in assets/vocabulary/noisefree-k10L5.voc].
-    #[arg(long, value_name = "FILE|none")]
-    pub vocabulary: Option<PathBuf>,
-    /// Emulate ORB-SLAM2's concurrent local mapping: each keyframe is mapped up to N frames
-    /// late (seeded), so runs with different --seed spread as ORB-SLAM2's do [default: 0,
-    /// synchronous as in the paper's protocol: runs of one sequence differ only where
-    /// relocalization's RANSAC draws].
-    #[arg(long = "mapping-lag", value_name = "N")]
-    pub mapping_lag: Option<u32>,
-    /// Turn loop closing off in every run (an ablation; the folder records it).
-    #[arg(long = "no-loop-closing")]
-    pub no_loop_closing: bool,
-    /// Synthetic sequences: number of frames (default 300); real ones: only the first N frames.
-    #[arg(long, value_name = "N")]
-    pub frames: Option<usize>,
-    /// Seed of synthetic sequences' scene and noise.
-    #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
-    pub synth_seed: u64,
-    /// Synthetic sequences: effects to switch off, comma-separated (an ablation): lens, blur,
-    /// rolling_shutter, vignetting, auto_exposure, sensor_noise, image_noise, tremor, depth_lag,
-    /// axial, quantisation, lateral, holes, misregistration, depth_distortion, mocap_noise,
-    /// layout, stamp_jitter, mocap_clock.
-    #[arg(long = "synth-without", value_name = "EFFECTS", value_delimiter = ',')]
-    pub synth_without: Vec<String>,
-    /// Data root for real sequences [default: $NOISEFREE_DATA, else ./data].
-    #[arg(long = "data-dir", value_name = "DIR")]
-    pub data_dir: Option<PathBuf>,
+    /// The system's settings file (and external systems), vocabulary, mapping lag and loop
+    /// closing.
+    #[command(flatten)]
+    pub system: SystemArgs,
+    /// The sequences' length, synthetic seed and ablated effects, and the data root.
+    #[command(flatten)]
+    pub sequence: SequenceArgs,
     /// Synthetic sequences: run k uses its own realization of the sequence (synth seed
     /// --synth-seed + k: other textures and noise draws), so the spread over runs measures the
     /// sensitivity to the noise rather than only to RANSAC.
@@ -241,7 +217,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
 /// The sweep the flags ask for, every value parsed once.
 fn request(args: &SweepArgs, catalog: &Catalog) -> Result<SweepRequest> {
     let sources = sources(args, catalog)?;
-    let systems: BTreeMap<String, SystemDef> = match &args.config {
+    let systems: BTreeMap<String, SystemDef> = match &args.system.config {
         Some(p) => systems_in_file(p)?,
         None => Default::default(),
     };
@@ -302,14 +278,14 @@ fn request(args: &SweepArgs, catalog: &Catalog) -> Result<SweepRequest> {
         threads: args.jobs,
         out: args.out.clone(),
         shard,
-        config: args.config.clone(),
-        vocabulary: args.vocabulary.clone(),
-        mapping_lag: args.mapping_lag,
-        no_loop_closing: args.no_loop_closing,
-        frames: args.frames,
-        synth_seed: args.synth_seed,
-        synth_without: args.synth_without.clone(),
-        data_dir: args.data_dir.clone(),
+        config: args.system.config.clone(),
+        vocabulary: args.system.vocabulary.clone(),
+        mapping_lag: args.system.mapping_lag,
+        no_loop_closing: args.system.no_loop_closing,
+        frames: args.sequence.frames,
+        synth_seed: args.sequence.synth_seed,
+        synth_without: args.sequence.synth_without.clone(),
+        data_dir: args.sequence.data_dir.clone(),
         vary_sequence: args.vary_sequence,
         retry_failed: args.retry_failed,
         axes,

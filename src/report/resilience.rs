@@ -45,14 +45,7 @@ impl LevelStats {
 
     /// Median of those ATEs.
     pub fn median(&self) -> Option<f64> {
-        let n = self.ates.len();
-        (n > 0).then(|| {
-            if n % 2 == 1 {
-                self.ates[n / 2]
-            } else {
-                0.5 * (self.ates[n / 2 - 1] + self.ates[n / 2])
-            }
-        })
+        crate::report::stats::median(&self.ates)
     }
 
     /// More than half of the runs failed (or none gave an ATE).

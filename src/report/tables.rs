@@ -183,11 +183,7 @@ fn tidy_csv(groups: &[Group], labels: &BTreeMap<String, String>) -> String {
             .filter_map(|r| r.ate_rmse)
             .collect();
         ok.sort_by(f64::total_cmp);
-        let median = match ok.len() {
-            0 => None,
-            n if n % 2 == 1 => Some(ok[n / 2]),
-            n => Some(0.5 * (ok[n / 2 - 1] + ok[n / 2])),
-        };
+        let median = crate::report::stats::median(&ok);
         let cores: Vec<f64> = g
             .runs
             .iter()
