@@ -4,6 +4,7 @@
 //! max(2 x its level-0 ATE, level-0 ATE + 1 cm), or where more than half of its runs fail.
 
 use crate::report::markdown::{system_label, Rendered};
+use crate::report::tables::{ate_columns, ATE_COLUMNS};
 use crate::sweep::plan::ConfigKind;
 use crate::sweep::store::RunRecord;
 use perturb::Family;
@@ -405,28 +406,20 @@ fn table_notes(curves: &[Curve]) -> String {
 /// curve's breaking level (or the highest level swept, flagged `held`) and its bootstrap shares.
 fn tidy_csv(family: &str, unit: &str, curves: &[Curve]) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let _ = w.write_record([
-        "sequence",
-        "system",
-        "label",
-        "ours",
-        "family",
-        "level",
-        "unit",
-        "n",
-        "failed",
-        "failure",
-        "mean_m",
-        "std_m",
-        "median_m",
-        "min_m",
-        "max_m",
-        "fps",
-        "breaking_level",
-        "held",
-        "breaks_here_share",
-        "holds_share",
-    ]);
+    let _ = w.write_record(
+        [
+            "sequence", "system", "label", "ours", "family", "level", "unit",
+        ]
+        .into_iter()
+        .chain(ATE_COLUMNS)
+        .chain([
+            "fps",
+            "breaking_level",
+            "held",
+            "breaks_here_share",
+            "holds_share",
+        ]),
+    );
     let opt = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
     for c in curves {
         // A curve that held reports the highest level swept, flagged `held`.
@@ -449,7 +442,7 @@ fn tidy_csv(family: &str, unit: &str, curves: &[Curve]) -> String {
             let here = shares
                 .as_ref()
                 .and_then(|(at, _)| at.iter().find(|(lv, _)| *lv == l.level).map(|(_, s)| *s));
-            let _ = w.write_record([
+            let head = [
                 c.sequence.clone(),
                 c.system.clone(),
                 c.label.clone(),
@@ -457,20 +450,16 @@ fn tidy_csv(family: &str, unit: &str, curves: &[Curve]) -> String {
                 family.to_string(),
                 format!("{}", l.level),
                 unit.to_string(),
-                l.n.to_string(),
-                l.failed.to_string(),
-                l.is_failure().to_string(),
-                opt(l.mean()),
-                opt(l.std()),
-                opt(l.median()),
-                opt(l.ates.first().copied()),
-                opt(l.ates.last().copied()),
+            ];
+            let tail = [
                 format!("{:.2}", l.fps),
                 b.clone(),
                 held.clone(),
                 opt(here),
                 opt(shares.as_ref().map(|(_, h)| *h)),
-            ]);
+            ];
+            let ates = ate_columns(l.n, l.failed, &l.ates);
+            let _ = w.write_record(head.into_iter().chain(ates).chain(tail));
         }
     }
     String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()

@@ -134,6 +134,29 @@ pub(crate) fn num(v: Option<f64>) -> String {
     v.map(|x| format!("{x}")).unwrap_or_default()
 }
 
+/// The ATE columns every tidy CSV carries, named as [`ate_columns`] fills them.
+pub(crate) const ATE_COLUMNS: [&str; 8] = [
+    "n", "failed", "failure", "mean_m", "std_m", "median_m", "min_m", "max_m",
+];
+
+/// The [`ATE_COLUMNS`] of `n` runs of which `failed` failed, `ates` the ATEs (m) of the others
+/// in the order their mean sums them: a failure when more than half failed or none gave an ATE.
+pub(crate) fn ate_columns(n: usize, failed: usize, ates: &[f64]) -> [String; 8] {
+    let mut sorted = ates.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let stats = mean_std(ates);
+    [
+        n.to_string(),
+        failed.to_string(),
+        (ates.is_empty() || 2 * failed > n).to_string(),
+        num(stats.map(|(m, _)| m)),
+        num(stats.map(|(_, s)| s)),
+        num(crate::report::stats::median(&sorted)),
+        num(sorted.first().copied()),
+        num(sorted.last().copied()),
+    ]
+}
+
 /// Mean frames per second of a group as Table IV gives it: over every run for ours, over the
 /// runs that did not fail for an external system (a crashed program's seconds are no speed).
 fn group_fps(config: &str, runs: &[&RunRecord]) -> Option<f64> {
@@ -148,42 +171,26 @@ fn group_fps(config: &str, runs: &[&RunRecord]) -> Option<f64> {
 /// The tidy CSV of `groups`: one row per group, numbers in SI units (ATE in metres).
 fn tidy_csv(groups: &[Group], labels: &BTreeMap<String, String>) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let _ = w.write_record([
-        "sequence",
-        "system",
-        "label",
-        "ours",
-        "tau_mf",
-        "tau_gf",
-        "tau_mg",
-        "baseline",
-        "n",
-        "failed",
-        "failure",
-        "mean_m",
-        "std_m",
-        "median_m",
-        "min_m",
-        "max_m",
-        "fps",
-        "cores",
-        "peak_rss_mb",
-        "loops",
-        "runs_with_loops",
-    ]);
+    let _ = w.write_record(
+        [
+            "sequence", "system", "label", "ours", "tau_mf", "tau_gf", "tau_mg", "baseline",
+        ]
+        .into_iter()
+        .chain(ATE_COLUMNS)
+        .chain(["fps", "cores", "peak_rss_mb", "loops", "runs_with_loops"]),
+    );
     for g in groups {
         let Some(first) = g.runs.first() else {
             continue;
         };
-        let cell = Cell::of(&g.runs);
-        let mut ok: Vec<f64> = g
+        // In run order, as Cell::of sums them for the tables' cells.
+        let ok: Vec<f64> = g
             .runs
             .iter()
             .filter(|r| !r.failed)
             .filter_map(|r| r.ate_rmse)
             .collect();
-        ok.sort_by(f64::total_cmp);
-        let median = crate::report::stats::median(&ok);
+        let failed = g.runs.iter().filter(|r| r.failed).count();
         let cores: Vec<f64> = g
             .runs
             .iter()
@@ -191,7 +198,7 @@ fn tidy_csv(groups: &[Group], labels: &BTreeMap<String, String>) -> String {
             .collect();
         let mem = g.runs.iter().filter_map(|r| r.peak_rss_mb).reduce(f64::max);
         let loops: Vec<usize> = g.runs.iter().filter_map(|r| r.loops).collect();
-        let _ = w.write_record([
+        let head = [
             g.sequence.clone(),
             g.config.clone(),
             system_label(&g.config, labels),
@@ -200,14 +207,8 @@ fn tidy_csv(groups: &[Group], labels: &BTreeMap<String, String>) -> String {
             num(first.tau_gf),
             num(first.tau_mg),
             num(first.baseline),
-            g.runs.len().to_string(),
-            cell.failed.to_string(),
-            cell.is_failure().to_string(),
-            num(cell.mean),
-            num(cell.std),
-            num(median),
-            num(ok.first().copied()),
-            num(ok.last().copied()),
+        ];
+        let tail = [
             num(group_fps(&g.config, &g.runs)),
             num((!cores.is_empty()).then(|| cores.iter().sum::<f64>() / cores.len() as f64)),
             num(mem),
@@ -221,7 +222,9 @@ fn tidy_csv(groups: &[Group], labels: &BTreeMap<String, String>) -> String {
             } else {
                 loops.iter().filter(|&&n| n > 0).count().to_string()
             },
-        ]);
+        ];
+        let ates = ate_columns(g.runs.len(), failed, &ok);
+        let _ = w.write_record(head.into_iter().chain(ates).chain(tail));
     }
     String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
