@@ -537,16 +537,8 @@ fn a_perturbed_copy_of_a_colour_folder_stays_in_colour_and_level_zero_is_the_inp
         src.to_str().unwrap(),
     ]);
     let first_rgb = |d: &Path| -> image::RgbImage {
-        let list = std::fs::read_to_string(d.join("rgb.txt")).unwrap();
-        let file = list
-            .lines()
-            .find(|l| !l.starts_with('#'))
-            .unwrap()
-            .split_whitespace()
-            .nth(1)
-            .unwrap()
-            .to_string();
-        let img = image::open(d.join(file)).unwrap();
+        let list = datasets::tum::read_list(&d.join("rgb.txt")).unwrap();
+        let img = image::open(d.join(&list[0].file)).unwrap();
         assert!(img.color().has_color(), "{}", d.display());
         img.into_rgb8()
     };
@@ -699,12 +691,13 @@ fn perturb_takes_the_shared_synthetic_flags_as_synth_and_run_do() {
         "--quiet",
     ]);
     let depth_files = |d: &Path| -> Vec<Vec<u16>> {
-        let list = std::fs::read_to_string(d.join("depth.txt")).unwrap();
-        list.lines()
-            .filter(|l| !l.starts_with('#'))
-            .map(|l| {
-                let file = d.join(l.split_whitespace().nth(1).unwrap());
-                image::open(file).unwrap().into_luma16().into_raw()
+        let list = datasets::tum::read_list(&d.join("depth.txt")).unwrap();
+        list.iter()
+            .map(|e| {
+                image::open(d.join(&e.file))
+                    .unwrap()
+                    .into_luma16()
+                    .into_raw()
             })
             .collect()
     };
