@@ -588,25 +588,32 @@ pub const TWINS: [TwinSpec; 33] = [
     },
 ];
 
+/// The V2 twins' list of what they do not model, as a literal so [`V203_NOT_MODELLED`] can
+/// extend it with `concat!`.
+macro_rules! v2_not_modelled {
+    () => {
+        "Vicon room 2's own layout (not found described: drawn like the V1 twins' room); the \
+        real room's mats lean, sag and fold, its curtains and a bright window saturate parts of \
+        the image, and it has tripods, cables and the Vicon cameras (thin structure); ours has \
+        upright box mats and even light; the take-off and landing at rest at two spots 2 m \
+        apart; no IMU data; the real ground truth's error is mostly slow, ours is white; \
+        Lambertian surfaces, a single point light; the mean angular speed is the real ground \
+        truth's over 50 ms steps, probably below the EuRoC paper's figure"
+    };
+}
+
 /// What the V2 twins do not model of their sequences: the V1 twins' list, and the second
 /// room's own furniture (not found described offline: the twins draw a Vicon-like room from
 /// the seed as the V1 twins do, and fly over the larger area the real V2 flights cover).
-pub const V2_NOT_MODELLED: &str = "Vicon room 2's own layout (not found described: drawn like \
-    the V1 twins' room); the real room's mats lean, sag and fold, its curtains and a bright \
-    window saturate parts of the image, and it has tripods, cables and the Vicon cameras (thin \
-    structure); ours has upright box mats and even light; the take-off and landing at rest at \
-    two spots 2 m apart; no IMU data; the real ground truth's error is mostly slow, ours is \
-    white; Lambertian surfaces, a single point light; the mean angular speed is the real ground \
-    truth's over 50 ms steps, probably below the EuRoC paper's figure";
+pub const V2_NOT_MODELLED: &str = v2_not_modelled!();
 
-/// What the V2_03 twin does not model: the V2 list, and the real sequence's missing frames.
-pub const V203_NOT_MODELLED: &str = "414 of the real left camera's 2335 frames are missing \
-    (single frames, over the last 95 s: ORB-SLAM2's V203.txt lists 1921 stereo pairs), so the \
-    real system sees 100 ms jumps where the twin renders every 50 ms frame; Vicon room 2's own \
-    layout (drawn like the V1 twins' room); the real room's mats, curtains, window, tripods and \
-    cables; the take-off and landing at rest; no IMU data; the ground truth's slow error; \
-    Lambertian surfaces, a single point light; the mean angular speed is the real ground \
-    truth's over 50 ms steps, probably below the EuRoC paper's figure";
+/// What the V2_03 twin does not model: the real sequence's missing frames, then the V2 list.
+pub const V203_NOT_MODELLED: &str = concat!(
+    "414 of the real left camera's 2335 frames are missing (single frames, over the last 95 s: \
+    ORB-SLAM2's V203.txt lists 1921 stereo pairs), so the real system sees 100 ms jumps where \
+    the twin renders every 50 ms frame; ",
+    v2_not_modelled!()
+);
 
 /// What the V1_01 twin does not model of the real sequence.
 pub const EUROC_NOT_MODELLED: &str = "the real room's mats lean, sag and fold, its curtains \
