@@ -557,7 +557,7 @@ fn a_perturbed_copy_of_a_colour_folder_stays_in_colour_and_level_zero_is_the_inp
         // Neither a depth, a calibration nor a ground-truth family touches a colour byte.
         assert_eq!(first_rgb(&src), first_rgb(&out), "{chain}");
         let list = std::fs::read_to_string(out.join("rgb.txt")).unwrap();
-        assert!(list.starts_with("# colour images"), "{list}");
+        assert!(list.starts_with("# color images"), "{list}");
     }
     let noisy = dir.join("noisy");
     noisefree_ok(&[

@@ -5,7 +5,7 @@
 
 use crate::commands::shared_args::SequenceArgs;
 use crate::select::{open, Source};
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use perturb::{perturb_sequence, Chain, Domain, Family, NamedChain};
 use std::path::{Path, PathBuf};
@@ -112,11 +112,9 @@ pub fn run(args: PerturbArgs) -> Result<()> {
     }
     let chain = Chain::parse(args.perturb.as_deref().unwrap_or("")).context("--perturb")?;
     let out = args.out.clone().context("--out is required")?;
+    // Refused before the work starts, as the writer would refuse it at the end.
     if out.exists() && std::fs::read_dir(&out)?.next().is_some() {
-        bail!(
-            "{}: the output folder exists and is not empty",
-            out.display()
-        );
+        return Err(datasets::DatasetError::OutputExists { path: out }.into());
     }
     let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
     let opts = args.sequence.load_options(args.camera.clone());

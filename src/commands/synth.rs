@@ -159,11 +159,7 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
     pb.set_message(format!("synth {}", args.preset));
     let start = Instant::now();
     let progress = |_: usize| pb.inc(1);
-    if gen.config().is_rgbd() {
-        synth::write_tum(&gen, frames, &args.out, progress)?;
-    } else {
-        synth::write_euroc(&gen, frames, &args.out, progress)?;
-    }
+    datasets::write::write_synthetic(&gen, frames, &args.out, progress)?;
     pb.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     println!(

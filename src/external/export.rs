@@ -235,11 +235,7 @@ fn write_synthetic(
         preset.name(),
         folder.display()
     );
-    if gen.config().is_rgbd() {
-        synth::write_tum(&gen, frames, folder, |_| {})?;
-    } else {
-        synth::write_euroc(&gen, frames, folder, |_| {})?;
-    }
+    datasets::write::write_synthetic(&gen, frames, folder, |_| {})?;
     Ok(())
 }
 

@@ -102,6 +102,23 @@ pub enum DatasetError {
         /// Where to put the files by hand.
         hint: String,
     },
+    /// An output folder that exists and is not empty (a writer never overwrites).
+    #[error("{}: the output folder exists and is not empty (remove it or choose another)", path.display())]
+    OutputExists {
+        /// The folder.
+        path: PathBuf,
+    },
+    /// An image that cannot be encoded while writing a folder.
+    #[error("{}: cannot encode image: {msg}", path.display())]
+    Encode {
+        /// The image file.
+        path: PathBuf,
+        /// The encoder's message.
+        msg: String,
+    },
+    /// A synthetic sequence that cannot be generated as asked (frames beyond a recorded path).
+    #[error(transparent)]
+    Synth(#[from] synth::SynthError),
     /// An archive that cannot be unpacked.
     #[error("{}: cannot unpack: {msg}", path.display())]
     Archive {

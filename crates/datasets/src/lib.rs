@@ -8,6 +8,8 @@
 //!   synthetic presets), [`data_root`];
 //! - [`fetch`]: download with resume, atomic unpack, verification;
 //! - [`cameras`]: the TUM cameras and depth factors; [`decode`]: PNG decoding.
+//! - [`write`]: the one writer of TUM RGB-D and EuRoC folders (synthetic sequences, perturbed
+//!   and exported copies), with one staging-and-rename.
 //! - [`settings`]: ORB-SLAM2 / ORB-SLAM3 camera settings files (YAML), written from a
 //!   sequence's camera and read back ([`open_path_with_settings`]).
 //!
@@ -25,6 +27,7 @@ pub mod sequence;
 pub mod settings;
 pub mod synthetic;
 pub mod tum;
+pub mod write;
 
 pub use cameras::CameraId;
 pub use catalog::{data_root, Ate, Catalog, Class, Entry, EntryFormat, PaperAte};

@@ -75,7 +75,7 @@ fn groundtruth(gen: &synth::Generator, rig: bool, n: usize) -> ate_eval::Traject
         ate_eval::Trajectory {
             stamps: (0..n).map(|i| gen.timestamp(i)).collect(),
             poses: (0..n)
-                .map(|i| synth::output::euroc::groundtruth_body(gen, i))
+                .map(|i| synth::output::body::groundtruth_body(gen, i))
                 .collect(),
         }
     } else {
@@ -84,7 +84,7 @@ fn groundtruth(gen: &synth::Generator, rig: bool, n: usize) -> ate_eval::Traject
     }
 }
 
-/// RGB-D: the depth units the generator writes (`synth::write_tum`) and the reader reads.
+/// RGB-D: the depth units the generator writes (`crate::write::write_synthetic`) and the reader reads.
 fn depth_factor(gen: &synth::Generator) -> Option<f64> {
     gen.config()
         .is_rgbd()
@@ -220,7 +220,7 @@ mod tests {
         let n = 2;
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("twin");
-        synth::write_euroc(&gen, n, &out, |_| ()).unwrap();
+        crate::write::write_synthetic(&gen, n, &out, |_| ()).unwrap();
         let disk = crate::euroc::load_euroc(&out).unwrap();
         // ORB-SLAM2's EuRoC.yaml, which our rectification of the real files reproduces.
         let c = &disk.camera;

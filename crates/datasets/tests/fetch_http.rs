@@ -165,7 +165,7 @@ fn downloads_resumes_unpacks_tgz_and_verifies() {
     let gen = synth::Generator::new(synth::SynthConfig::preset("clean").unwrap(), 3);
     let src = tempfile::tempdir().unwrap();
     let seq_dir = src.path().join("seq");
-    synth::write_tum(&gen, 3, &seq_dir, |_| {}).unwrap();
+    datasets::write::write_synthetic(&gen, 3, &seq_dir, |_| {}).unwrap();
     let folder = "rgbd_dataset_freiburg3_tiny";
     let archive = tgz_of(&seq_dir, folder);
     let name = format!("{folder}.tgz");

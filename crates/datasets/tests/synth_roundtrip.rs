@@ -1,5 +1,5 @@
 //! Round trips through the synthetic generator's writers: a sequence written in the TUM RGB-D
-//! layout (`synth::write_tum`) or the EuRoC layout (`synth::write_euroc`) reads back with the
+//! layout or the EuRoC layout (`datasets::write::write_synthetic`) reads back with the
 //! same frames (bytes), timestamps and ground-truth poses, and equals the in-memory
 //! `from_synth` sequence.
 
@@ -13,7 +13,7 @@ fn tum_layout_round_trips() {
     let gen = Generator::new(SynthConfig::preset("kinect").unwrap(), 11);
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("synthetic_kinect");
-    synth::write_tum(&gen, N, &dir, |_| {}).unwrap();
+    datasets::write::write_synthetic(&gen, N, &dir, |_| {}).unwrap();
     let seq = load_tum(&dir, Some(gen.camera())).unwrap();
     let mem = from_synth(&gen, N);
     assert_eq!(seq.format, Format::TumRgbd);
@@ -46,7 +46,7 @@ fn euroc_layout_round_trips() {
     let gen = Generator::new(SynthConfig::preset("stereo").unwrap(), 5);
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("synthetic_stereo");
-    synth::write_euroc(&gen, N, &dir, |_| {}).unwrap();
+    datasets::write::write_synthetic(&gen, N, &dir, |_| {}).unwrap();
     let seq = load_path(&dir).unwrap();
     assert_eq!(seq.format, Format::EurocStereo);
     assert_eq!(load_euroc(&dir).unwrap().len(), N);
@@ -105,7 +105,7 @@ fn tum_stream_stamps_round_trip() {
     let n = 6;
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("synthetic_clocks");
-    synth::write_tum(&gen, n, &dir, |_| {}).unwrap();
+    datasets::write::write_synthetic(&gen, n, &dir, |_| {}).unwrap();
     let mem = from_synth(&gen, n);
     let with_assoc = load_tum(&dir, Some(gen.camera())).unwrap();
     std::fs::remove_file(dir.join("associations.txt")).unwrap();
@@ -244,7 +244,7 @@ fn fr2_twin_depth_reads_back_with_orbslam2s_factor() {
     let n = 2;
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("rgbd_dataset_freiburg2_twin");
-    synth::write_tum(&gen, n, &dir, |_| {}).unwrap();
+    datasets::write::write_synthetic(&gen, n, &dir, |_| {}).unwrap();
     let seq = load_tum(&dir, None).unwrap();
     let mem = from_synth(&gen, n);
     assert_eq!(seq.camera, gen.camera());

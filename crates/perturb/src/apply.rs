@@ -17,8 +17,9 @@ use slam_core::{Camera, FrameInput, SensorKind};
 use std::sync::Arc;
 use synth::hash::{NoiseKey, Stream};
 
-/// Depth PNG units of a sequence without a recorded depth factor (TUM's 5000 per metre).
-pub const DEFAULT_DEPTH_UNITS: f64 = 5000.0;
+/// Depth PNG units of a sequence without a recorded depth factor (TUM's 5000 per metre), the
+/// ones the folder writer uses.
+pub use datasets::write::DEFAULT_DEPTH_UNITS;
 
 /// Applies a chain to the frames of one sequence.
 #[derive(Clone, Debug)]

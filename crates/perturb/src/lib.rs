@@ -95,14 +95,6 @@ pub enum PerturbError {
     /// Reading a frame of the underlying sequence failed.
     #[error(transparent)]
     Dataset(#[from] datasets::DatasetError),
-    /// Writing a folder failed.
-    #[error("{path}: {msg}")]
-    Write {
-        /// The file or folder.
-        path: std::path::PathBuf,
-        /// What went wrong.
-        msg: String,
-    },
 }
 
 /// The seed of one member of a chain: the perturbation seed, the family and its position mixed,

@@ -71,7 +71,4 @@ pub enum SynthError {
         /// The largest frame count that fits.
         max_frames: usize,
     },
-    /// The output folder exists and is not empty.
-    #[error("{0}: output folder exists and is not empty (remove it or choose another)")]
-    OutputExists(PathBuf),
 }

@@ -6,14 +6,15 @@
 //! a specification ([`spec`]); the generator ([`generator`]) builds its world ([`world`]) and
 //! camera path ([`motion`]) once, then renders each frame through the sensor ([`sensor`]:
 //! ray-casting, imaging, depth noise) and stamps it ([`motion::clock`]); the frame is kept in
-//! memory or written out ([`output`]: TUM or EuRoC folder, contact sheet).
+//! memory or written out ([`output`]: contact sheet, frame cache; dataset folders are written by
+//! `datasets::write`).
 //!
 //! Imports run one way, down this list (a file uses only files of lower layers, and of its
 //! own folder those it lists above it); `tools/import_graph.py` checks it:
 //! - [`catalog`]: `presets` (the named presets) and `twins` (the paper's sequences) — names
 //!   become specifications;
-//! - [`output`]: `tum`, `euroc` (folder layouts), `contact` (a contact sheet), `frame_cache`
-//!   (rendered frames shared between processes);
+//! - [`output`]: `body` (the body frame of stereo ground truth), `contact` (a contact sheet),
+//!   `frame_cache` (rendered frames shared between processes);
 //! - [`generator`]: random access to the frames of a (specification, seed) sequence;
 //! - [`spec`]: [`SynthConfig`], every stage's options side by side, checked and ablated;
 //! - [`sensor`]: `imaging` (exposure, rolling shutter, vignetting, auto-exposure, sensor
@@ -45,9 +46,7 @@ pub use motion::handheld::HandHeldPath;
 pub use motion::recorded::RecordedPath;
 pub use motion::trajectory::Trajectory;
 pub use output::contact::{contact_sheet, write_contact_sheet};
-pub use output::euroc::write_euroc;
 pub use output::frame_cache::{cache_dir_from_env, CachedFrames, CACHE_ENV};
-pub use output::tum::write_tum;
 pub use sensor::depth::{
     AxialNoise, BlobHoles, DepthLag, DepthNoise, DisparityQuantisation, FlyingPixels, Holes,
     LateralNoise, Misregistration, SystematicDistortion,

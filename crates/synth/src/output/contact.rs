@@ -8,9 +8,16 @@ use image::{Rgb, RgbImage};
 
 use crate::error::SynthError;
 use crate::generator::{Generator, SynthFrame};
-use crate::output::write::io_err;
 
 const GAP: u32 = 4;
+
+/// Wraps an I/O error with its path.
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> SynthError + '_ {
+    move |source| SynthError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
 
 fn jet(x: f64) -> [u8; 3] {
     let c = |o: f64| ((1.5 - (4.0 * x - o).abs()).clamp(0.0, 1.0) * 255.0) as u8;

@@ -1,13 +1,12 @@
-//! Where generated frames go besides memory: dataset folders other programs read, and pictures.
+//! Where generated frames go besides memory, and the frame their ground truth is stated in.
 //!
-//! - [`tum`]: the TUM RGB-D layout (RGB-D sequences);
-//! - [`euroc`]: the EuRoC ASL layout (stereo sequences);
+//! - [`body`]: the body (IMU) frame of a stereo sequence, EuRoC's frame of ground truth;
 //! - [`contact`]: a contact sheet (colour | depth | depth error) of a few frames;
-//! - [`frame_cache`]: a folder of rendered frames that processes share;
-//! - `write` (private): the staging folder, text and PNG files they share.
+//! - [`frame_cache`]: a folder of rendered frames that processes share.
+//!
+//! Dataset folders (TUM RGB-D, EuRoC ASL) are written by `datasets::write`, beside the readers
+//! they must round-trip with.
 
+pub mod body;
 pub mod contact;
-pub mod euroc;
 pub mod frame_cache;
-pub mod tum;
-mod write;

@@ -1,14 +1,17 @@
-//! The TUM and EuRoC folders written by the generator read back (with plain PNG / text
-//! parsing, independent of the project's dataset readers) to exactly the in-memory frames.
+//! The TUM and EuRoC folders written from a generator's frames (`datasets::write`) read back,
+//! with plain PNG and text parsing independent of the project's dataset readers, to exactly the
+//! in-memory frames; a folder that exists is never overwritten.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use datasets::write::write_synthetic;
+use datasets::DatasetError;
 use nalgebra::{Isometry3, Matrix4, Quaternion, Translation3, UnitQuaternion};
-use synth::{write_euroc, write_tum, Generator, SynthConfig, SynthError};
+use synth::{Generator, SynthConfig};
 
 fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("synth-test-{name}-{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!("datasets-write-test-{name}-{}", std::process::id()));
     let _ = fs::remove_dir_all(&d);
     d
 }
@@ -26,7 +29,7 @@ fn tum_folder_reads_back_identically() {
     let gen = Generator::new(SynthConfig::preset("walking").unwrap(), 3);
     let dir = temp_dir("tum");
     let n = 3;
-    write_tum(&gen, n, &dir, |_| {}).unwrap();
+    write_synthetic(&gen, n, &dir, |_| {}).unwrap();
     let rgb_txt = lines(&dir.join("rgb.txt"));
     let depth_txt = lines(&dir.join("depth.txt"));
     let gt = lines(&dir.join("groundtruth.txt"));
@@ -80,8 +83,8 @@ fn tum_folder_reads_back_identically() {
         .all(|p| ((p[1] - p[0]) - 1.0 / 30.0).abs() < 2e-6));
     // Refuses to overwrite.
     assert!(matches!(
-        write_tum(&gen, 1, &dir, |_| {}),
-        Err(SynthError::OutputExists(_))
+        write_synthetic(&gen, 1, &dir, |_| {}),
+        Err(DatasetError::OutputExists { .. })
     ));
     fs::remove_dir_all(&dir).unwrap();
 }
@@ -103,7 +106,7 @@ fn euroc_folder_reads_back_identically() {
     let cam = gen.camera();
     let dir = temp_dir("euroc");
     let n = 3;
-    write_euroc(&gen, n, &dir, |_| {}).unwrap();
+    write_synthetic(&gen, n, &dir, |_| {}).unwrap();
     let mav = dir.join("mav0");
     let csv0 = lines(&mav.join("cam0/data.csv"));
     assert_eq!(csv0[0], "#timestamp [ns],filename");
@@ -169,48 +172,4 @@ fn euroc_folder_reads_back_identically() {
         );
     }
     fs::remove_dir_all(&dir).unwrap();
-}
-
-#[test]
-fn writers_reject_the_wrong_sensor() {
-    let dir = temp_dir("wrong");
-    let rgbd = Generator::new(SynthConfig::preset("clean").unwrap(), 1);
-    assert!(matches!(
-        write_euroc(&rgbd, 1, &dir, |_| {}),
-        Err(SynthError::InvalidConfig(_))
-    ));
-    assert!(!dir.exists());
-}
-
-/// A contact sheet is written whole in the format its extension names (PNG, or JPEG for
-/// `.jpg`), with no temporary file left beside it; a sequence too short is refused.
-#[test]
-fn contact_sheets_are_png_or_jpeg_by_extension() {
-    let mut config = SynthConfig::preset("kinect").unwrap();
-    (config.camera.width, config.camera.height) = (160, 120);
-    (config.camera.cx, config.camera.cy) = (80.0, 60.0);
-    let gen = Generator::new(config, 2);
-    let dir = temp_dir("contact");
-    fs::create_dir_all(&dir).unwrap();
-    for (name, magic) in [
-        ("sheet.png", &[0x89u8, b'P', b'N', b'G'][..]),
-        ("sheet.jpg", &[0xFF, 0xD8, 0xFF][..]),
-    ] {
-        let path = dir.join(name);
-        synth::write_contact_sheet(&gen, 20, 2, &path).unwrap();
-        let bytes = fs::read(&path).unwrap();
-        assert!(bytes.starts_with(magic), "{name}");
-        let img = image::load_from_memory(&bytes).unwrap();
-        let expected = synth::contact_sheet(&gen, &[0, 1]);
-        assert_eq!(
-            (img.width(), img.height()),
-            (expected.width(), expected.height())
-        );
-    }
-    assert_eq!(
-        fs::read_dir(&dir).unwrap().count(),
-        2,
-        "no temporary files left"
-    );
-    let _ = fs::remove_dir_all(&dir);
 }
