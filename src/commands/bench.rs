@@ -21,7 +21,8 @@
 //! combine: `mcor+avc:direct:stride2`.
 
 use crate::bench::{column_width, figures_header, figures_rows, parse_configs, Bench};
-use crate::config_file::{base_config, overlay_file};
+use crate::commands::shared_args::SystemArgs;
+use crate::seeded_runs::system_config;
 use crate::select::{open, LoadOptions, Source};
 use anyhow::{bail, Result};
 use ate_eval::io::write_atomic;
@@ -57,15 +58,10 @@ pub struct BenchArgs {
     /// 0 leaves the sweep figure out.
     #[arg(long = "sweep-seeds", default_value_t = 3, value_name = "N")]
     pub sweep_seeds: u64,
-    /// Emulated local-mapping lag (`run --mapping-lag`).
-    #[arg(long = "mapping-lag", value_name = "N")]
-    pub mapping_lag: Option<u32>,
-    /// TOML configuration overlaid on the sensor's defaults.
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Place-recognition vocabulary, or `none` [default: the built-in one].
-    #[arg(long, value_name = "FILE|none")]
-    pub vocabulary: Option<PathBuf>,
+    /// The system's settings file, vocabulary, mapping lag and loop closing, as `run` takes
+    /// them.
+    #[command(flatten)]
+    pub system: SystemArgs,
     /// Seed of a synthetic sequence's scene and noise.
     #[arg(long = "synth-seed", default_value_t = 0, value_name = "S")]
     pub synth_seed: u64,
@@ -99,16 +95,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
         camera: None,
     };
     let (seq, reader) = open(&source, &catalog, &opts)?;
-    let mut base = base_config(seq.camera.sensor);
-    if let Some(p) = &args.config {
-        base = overlay_file(&base, p)?;
-    }
-    if let Some(lag) = args.mapping_lag {
-        base.mapping_lag = lag;
-    }
-    base.check()
-        .map_err(|e| anyhow::anyhow!("{e} (from the command line or --config)"))?;
-    let vocabulary = crate::vocab_file::choose(args.vocabulary.as_deref())?.vocabulary;
+    let base = system_config(
+        seq.camera.sensor,
+        args.system.config.as_deref(),
+        args.system.switches(),
+    )?;
+    let vocabulary =
+        crate::vocab_file::choose(args.system.vocabulary_flag()?.as_deref())?.vocabulary;
     let bench = Bench::prepare(source.label(), seq, &reader, base, vocabulary)?;
     if args.profile {
         println!("{}", bench.profile_line(kinds[0]));
@@ -141,9 +134,10 @@ mod tests {
             configs: configs.iter().map(|c| c.to_string()).collect(),
             repeat: 2,
             sweep_seeds: 1,
-            mapping_lag: None,
-            config: None,
-            vocabulary: Some("none".into()),
+            system: SystemArgs {
+                vocabulary: Some("none".into()),
+                ..SystemArgs::default()
+            },
             synth_seed: 0,
             data_dir: None,
             json: None,
@@ -222,7 +216,7 @@ mod tests {
         let toml = dir.join("bad.toml");
         std::fs::write(&toml, "[orb]\nscale_factor = 0.5\n").unwrap();
         let mut a = args(&["orb"], 10);
-        a.config = Some(toml);
+        a.system.config = Some(toml);
         let e = run(a).unwrap_err();
         assert!(format!("{e:#}").contains("scale_factor"), "{e:#}");
         std::fs::remove_dir_all(&dir).ok();

@@ -108,22 +108,16 @@ pub fn run(args: RunArgs) -> Result<()> {
     let switches = Switches {
         mcor: args.mcor,
         avc: args.avc,
-        mapping_lag: args.system.mapping_lag,
-        no_loop_closing: args.system.no_loop_closing,
         mcor_cluster: args.mcor_cluster,
         rc: args.rc,
+        ..args.system.switches()
     };
     let config = system_config(
         loaded.seq.camera.sensor,
         args.system.config.as_deref(),
         switches,
     )?;
-    let vocab_flag = match (&args.system.vocabulary, &args.system.config) {
-        (Some(v), _) => Some(v.clone()),
-        (None, Some(c)) => crate::config_file::vocabulary_in_file(c)?,
-        (None, None) => None,
-    };
-    let vocabulary = crate::vocab_file::choose(vocab_flag.as_deref())?;
+    let vocabulary = crate::vocab_file::choose(args.system.vocabulary_flag()?.as_deref())?;
     let cname = config_name(&config);
     let out = args
         .out

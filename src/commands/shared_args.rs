@@ -2,7 +2,9 @@
 //! with one help text, so `run`, `sweep`, `perturb` and `match` cannot drift apart on what
 //! `--frames` or `--mapping-lag` means.
 
+use crate::config_file::{vocabulary_in_file, Switches};
 use crate::select::LoadOptions;
+use anyhow::Result;
 use std::path::PathBuf;
 
 /// How a sequence is realised before anything reads it: its length, and for a synthetic one
@@ -65,4 +67,70 @@ pub struct SystemArgs {
     /// none it is off anyway.
     #[arg(long = "no-loop-closing")]
     pub no_loop_closing: bool,
+}
+
+impl SystemArgs {
+    /// The switches these flags set (the mapping lag, loop closing); a command adds its own
+    /// technique switches.
+    pub fn switches(&self) -> Switches {
+        Switches {
+            mapping_lag: self.mapping_lag,
+            no_loop_closing: self.no_loop_closing,
+            ..Switches::default()
+        }
+    }
+
+    /// The vocabulary asked for: `--vocabulary`, else the `--config` file's `vocabulary`;
+    /// `None`: the built-in one.
+    pub fn vocabulary_flag(&self) -> Result<Option<PathBuf>> {
+        Ok(match (&self.vocabulary, &self.config) {
+            (Some(v), _) => Some(v.clone()),
+            (None, Some(c)) => vocabulary_in_file(c)?,
+            (None, None) => None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    /// A command line of one flattened group.
+    #[derive(Parser)]
+    struct Line {
+        #[command(flatten)]
+        system: SystemArgs,
+    }
+
+    #[test]
+    fn system_flags_become_the_lag_and_loop_switches_and_nothing_else() {
+        let l = Line::try_parse_from(["x", "--mapping-lag", "3", "--no-loop-closing"]).unwrap();
+        let s = l.system.switches();
+        assert_eq!(s.mapping_lag, Some(3));
+        assert!(s.no_loop_closing);
+        assert!(!s.mcor && !s.avc && !s.rc && s.mcor_cluster.is_none());
+        let none = Line::try_parse_from(["x"]).unwrap().system.switches();
+        assert_eq!(none.mapping_lag, None);
+        assert!(!none.no_loop_closing);
+    }
+
+    #[test]
+    fn the_vocabulary_flag_beats_the_config_file_which_beats_the_default() {
+        let dir = std::env::temp_dir().join(format!("nf-shared-args-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let toml = dir.join("c.toml");
+        std::fs::write(&toml, "vocabulary = \"words.voc\"\n").unwrap();
+        let config = toml.to_str().unwrap();
+        let flag = Line::try_parse_from(["x", "--config", config, "--vocabulary", "none"]).unwrap();
+        assert_eq!(flag.system.vocabulary_flag().unwrap(), Some("none".into()));
+        let file = Line::try_parse_from(["x", "--config", config]).unwrap();
+        assert_eq!(
+            file.system.vocabulary_flag().unwrap(),
+            Some(dir.join("words.voc"))
+        );
+        let neither = Line::try_parse_from(["x"]).unwrap();
+        assert_eq!(neither.system.vocabulary_flag().unwrap(), None);
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
