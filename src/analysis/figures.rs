@@ -3,26 +3,20 @@
 //! and Fig. 7 (one frame in grey with the features MC-OR kept in green and rejected in red,
 //! a PNG through the image crate).
 
-use anyhow::{anyhow, Context, Result};
+use crate::report::figures::{draw_legend, err, register_font, LegendStyle};
+use anyhow::{Context, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use slam_core::GrayImage;
 use std::path::Path;
-use std::sync::Once;
 
-static FONT: Once = Once::new();
-
-fn register_font() {
-    FONT.call_once(|| {
-        let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
-        // Fails only on a corrupt font file, which the build embeds; ignore.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
-    });
-}
-
-fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow!("drawing a figure: {e:?}")
-}
+/// The per-frame panels' legend: upper right (the curves start low at the left), 15 px labels
+/// to match the panels' axis labels.
+const PANEL_LEGEND: LegendStyle = LegendStyle {
+    upper_left: false,
+    font_px: 15,
+    opacity: 0.85,
+};
 
 /// Blue: the baseline (ORB-SLAM2).
 pub const BASELINE_COLOR: RGBColor = RGBColor(31, 119, 180);
@@ -114,14 +108,7 @@ where
                     PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
                 });
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 15))
-            .draw()
-            .map_err(err)?;
+        draw_legend(&mut chart, PANEL_LEGEND)?;
     }
     Ok(())
 }

@@ -12,7 +12,9 @@ use std::sync::Once;
 
 static FONT: Once = Once::new();
 
-fn register_font() {
+/// Registers the embedded DejaVu Sans as "sans-serif" (once per process), so a machine without
+/// fonts draws every figure's text.
+pub(crate) fn register_font() {
     FONT.call_once(|| {
         let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
         // Registration fails only on a corrupt font file, which the build embeds; ignore.
@@ -30,7 +32,8 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(148, 103, 189),
 ];
 
-fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+/// A plotters error as the figures report it.
+pub(crate) fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing a figure: {e:?}")
 }
 
@@ -84,16 +87,40 @@ macro_rules! both {
     }};
 }
 
-/// The legend box every figure uses: upper left, translucent white, 18 px labels.
-fn draw_legend<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64>>(
+/// Where a figure's legend box sits and how large its labels are (translucent white, black
+/// border, for every figure).
+#[derive(Clone, Copy)]
+pub(crate) struct LegendStyle {
+    /// The corner of the plot: upper left when true, upper right otherwise.
+    pub upper_left: bool,
+    /// Label size in pixels.
+    pub font_px: u32,
+    /// Opacity of the white background.
+    pub opacity: f64,
+}
+
+/// The results figures' legend: upper left (their axes leave room there), 18 px labels.
+pub(crate) const RESULTS_LEGEND: LegendStyle = LegendStyle {
+    upper_left: true,
+    font_px: 18,
+    opacity: 0.8,
+};
+
+/// Draws the legend of `chart`'s labelled series in `style`.
+pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64>>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    style: LegendStyle,
 ) -> Result<()> {
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.8))
+        .position(if style.upper_left {
+            SeriesLabelPosition::UpperLeft
+        } else {
+            SeriesLabelPosition::UpperRight
+        })
+        .background_style(WHITE.mix(style.opacity))
         .border_style(BLACK)
-        .label_font(("sans-serif", 18))
+        .label_font(("sans-serif", style.font_px))
         .draw()
         .map_err(err)?;
     Ok(())
@@ -170,7 +197,7 @@ pub fn trajectories(
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
                 });
         }
-        draw_legend(&mut chart)
+        draw_legend(&mut chart, RESULTS_LEGEND)
     })
 }
 
@@ -255,7 +282,7 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
                 )
                 .map_err(err)?;
         }
-        draw_legend(&mut chart)
+        draw_legend(&mut chart, RESULTS_LEGEND)
     })
 }
 
@@ -356,7 +383,7 @@ pub fn relative_ate(
             })
             .collect();
         chart.draw_series(bars).map_err(err)?;
-        draw_legend(&mut chart)
+        draw_legend(&mut chart, RESULTS_LEGEND)
     })
 }
 
@@ -418,7 +445,7 @@ pub fn per_frame(
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
                 });
         }
-        draw_legend(&mut chart)
+        draw_legend(&mut chart, RESULTS_LEGEND)
     })
 }
 
@@ -523,6 +550,6 @@ pub fn resilience(
                 )
                 .map_err(err)?;
         }
-        draw_legend(&mut chart)
+        draw_legend(&mut chart, RESULTS_LEGEND)
     })
 }
