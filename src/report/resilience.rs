@@ -478,32 +478,18 @@ mod tests {
         failed: bool,
     ) -> RunRecord {
         RunRecord {
-            sequence: "s".into(),
-            config: config.into(),
-            tau_mf: None,
-            tau_gf: None,
-            tau_mg: None,
-            baseline: None,
-            seed,
-            ate_rmse: Some(ate),
             failed,
-            frames: 100,
-            tracked: 100,
             keyframes: None,
             map_points: None,
             mean_inliers: None,
             mean_outliers: None,
-            fps: 100.0,
-            wall_s: 1.0,
             synth_seed: None,
             loops: None,
-            reason: None,
-            peak_rss_mb: None,
-            cpu_s: None,
             perturbation: Some(family.map_or("none".into(), |f| format!("{f}:{level}"))),
             perturb_family: family.map(String::from),
             perturb_level: family.map(|_| level),
             perturb_seed: Some(0),
+            ..RunRecord::example("s", config, seed, ate)
         }
     }
 

@@ -1035,32 +1035,13 @@ mod tests {
 
     fn record(sequence: &str, ate: f64) -> RunRecord {
         RunRecord {
-            sequence: sequence.into(),
-            config: "orb".into(),
-            tau_mf: None,
-            tau_gf: None,
-            tau_mg: None,
-            baseline: None,
-            seed: 0,
-            ate_rmse: Some(ate),
-            failed: false,
             frames: 700,
             tracked: 700,
             keyframes: Some(20),
             map_points: Some(1500),
-            mean_inliers: Some(300.0),
             mean_outliers: Some(100.0),
-            fps: 100.0,
             wall_s: 7.0,
-            synth_seed: Some(0),
-            loops: Some(0),
-            reason: None,
-            peak_rss_mb: None,
-            cpu_s: None,
-            perturbation: None,
-            perturb_family: None,
-            perturb_level: None,
-            perturb_seed: None,
+            ..RunRecord::example(sequence, "orb", 0, ate)
         }
     }
 

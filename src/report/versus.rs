@@ -524,32 +524,11 @@ pub(crate) mod tests {
         point: Option<(&str, f64)>,
     ) -> RunRecord {
         RunRecord {
-            sequence: seq.into(),
-            config: config.into(),
-            tau_mf: None,
-            tau_gf: None,
-            tau_mg: None,
-            baseline: None,
-            seed,
-            ate_rmse: Some(ate),
-            failed: false,
-            frames: 100,
-            tracked: 100,
-            keyframes: Some(5),
-            map_points: Some(500),
-            mean_inliers: Some(300.0),
-            mean_outliers: Some(10.0),
-            fps: 100.0,
-            wall_s: 1.0,
-            synth_seed: Some(0),
-            loops: Some(0),
-            reason: None,
-            peak_rss_mb: None,
-            cpu_s: None,
             perturbation: point.map(|(f, l)| format!("{f}:{l}")),
             perturb_family: point.map(|(f, _)| f.to_string()),
             perturb_level: point.map(|(_, l)| l),
             perturb_seed: Some(seed),
+            ..RunRecord::example(seq, config, seed, ate)
         }
     }
 

@@ -112,6 +112,43 @@ impl RunRecord {
     }
 }
 
+#[cfg(test)]
+impl RunRecord {
+    /// A finished, unperturbed run of `config` on `sequence` for tests: 100 frames all tracked at
+    /// 100 frames/s, 5 keyframes, 500 map points, 300 inliers and 10 outliers a frame, synthetic
+    /// seed 0, no loop closed; change what a test is about with struct update syntax.
+    pub(crate) fn example(sequence: &str, config: &str, seed: u64, ate: f64) -> RunRecord {
+        RunRecord {
+            sequence: sequence.into(),
+            config: config.into(),
+            tau_mf: None,
+            tau_gf: None,
+            tau_mg: None,
+            baseline: None,
+            seed,
+            ate_rmse: Some(ate),
+            failed: false,
+            frames: 100,
+            tracked: 100,
+            keyframes: Some(5),
+            map_points: Some(500),
+            mean_inliers: Some(300.0),
+            mean_outliers: Some(10.0),
+            fps: 100.0,
+            wall_s: 1.0,
+            synth_seed: Some(0),
+            loops: Some(0),
+            reason: None,
+            peak_rss_mb: None,
+            cpu_s: None,
+            perturbation: None,
+            perturb_family: None,
+            perturb_level: None,
+            perturb_seed: None,
+        }
+    }
+}
+
 /// The file that pins a sweep folder's emulated local-mapping lag (`--mapping-lag`). A folder
 /// without it was swept synchronously (lag 0), as every sweep before the option existed.
 pub const SETTINGS_FILE: &str = "sweep-settings.toml";
@@ -651,17 +688,9 @@ mod tests {
 
     fn rec(seq: &str, seed: u64) -> RunRecord {
         RunRecord {
-            sequence: seq.into(),
-            config: "mcor".into(),
             tau_mf: Some(0.7),
             tau_gf: Some(0.7),
             tau_mg: Some(0.5),
-            baseline: None,
-            seed,
-            ate_rmse: Some(0.0123),
-            failed: false,
-            frames: 100,
-            tracked: 100,
             keyframes: Some(10),
             map_points: Some(1000),
             mean_inliers: Some(300.5),
@@ -669,14 +698,7 @@ mod tests {
             fps: 80.0,
             wall_s: 1.25,
             synth_seed: Some(1),
-            loops: Some(0),
-            reason: None,
-            peak_rss_mb: None,
-            cpu_s: None,
-            perturbation: None,
-            perturb_family: None,
-            perturb_level: None,
-            perturb_seed: None,
+            ..RunRecord::example(seq, "mcor", seed, 0.0123)
         }
     }
 
