@@ -11,7 +11,7 @@ use crate::calibration::given_camera;
 use crate::family::{Domain, Family, Perturbation};
 use crate::groundtruth::perturb_groundtruth;
 use crate::spec::Chain;
-use crate::{depth, image, member_seed, occluders, stereo, PerturbError};
+use crate::{depth, image, occluders, stereo, PerturbError};
 use datasets::{FrameReader, Sequence};
 use slam_core::{Camera, FrameInput, SensorKind};
 use std::sync::Arc;
@@ -219,6 +219,13 @@ fn channel_key(key: NoiseKey, channel: u64) -> NoiseKey {
         return key;
     }
     NoiseKey::new(key.bits(0x4348_414e ^ channel), 0, Stream::ImageLeft)
+}
+
+/// The seed of one member of a chain: the perturbation seed, the family and its position mixed,
+/// so two members never share random numbers.
+fn member_seed(seed: u64, family: Family, position: usize) -> u64 {
+    use synth::hash::mix64;
+    mix64(seed ^ mix64(0x5045_5254_5552_4221 ^ ((family as u64) << 8) ^ position as u64))
 }
 
 /// The member seed of a chain's member at `position` of `family` under perturbation seed
