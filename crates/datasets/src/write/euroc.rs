@@ -84,23 +84,8 @@ pub struct EurocLists {
 /// One line of the ground-truth CSV, `ns,px,py,pz,qw,qx,qy,qz`: with [`Digits::Dataset`] 9
 /// decimals and qw >= 0, with [`Digits::Exact`] every digit of the pose as it is.
 pub fn groundtruth_line(ns: i64, pose: &Isometry3<f64>, digits: Digits) -> String {
-    let p = pose.translation.vector;
-    let mut q = *pose.rotation.quaternion();
-    match digits {
-        Digits::Dataset => {
-            if q.w < 0.0 {
-                q = -q;
-            }
-            format!(
-                "{ns},{:.9},{:.9},{:.9},{:.9},{:.9},{:.9},{:.9}",
-                p.x, p.y, p.z, q.w, q.i, q.j, q.k
-            )
-        }
-        Digits::Exact => format!(
-            "{ns},{},{},{},{},{},{},{}",
-            p.x, p.y, p.z, q.w, q.i, q.j, q.k
-        ),
-    }
+    let ([x, y, z], [qx, qy, qz, qw]) = digits.pose_values(pose);
+    format!("{ns},{x},{y},{z},{qw},{qx},{qy},{qz}")
 }
 
 /// A camera's `sensor.yaml`, laid out as EuRoC's own.

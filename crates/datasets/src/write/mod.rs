@@ -28,3 +28,28 @@ pub enum Digits {
     /// sequence needs, so that noisefree on the copy runs on what it ran on before.
     Exact,
 }
+
+impl Digits {
+    /// A pose value (metres, or a quaternion coordinate) as these digits print it.
+    fn value(self, x: f64) -> String {
+        match self {
+            Digits::Dataset => format!("{x:.9}"),
+            Digits::Exact => format!("{x}"),
+        }
+    }
+
+    /// The translation (x, y, z) and the quaternion (x, y, z, w) of `pose` as a ground-truth
+    /// line prints them: with [`Digits::Dataset`] the quaternion's sign chosen so qw >= 0 (the
+    /// datasets' convention), with [`Digits::Exact`] as it is.
+    fn pose_values(self, pose: &nalgebra::Isometry3<f64>) -> ([String; 3], [String; 4]) {
+        let v = pose.translation.vector;
+        let mut q = *pose.rotation.quaternion();
+        if self == Digits::Dataset && q.w < 0.0 {
+            q = -q;
+        }
+        (
+            [v.x, v.y, v.z].map(|x| self.value(x)),
+            [q.i, q.j, q.k, q.w].map(|x| self.value(x)),
+        )
+    }
+}

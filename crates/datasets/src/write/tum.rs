@@ -55,23 +55,8 @@ pub fn stamp_text(t: f64, digits: Digits) -> String {
 /// 9 decimals and the quaternion's sign chosen so qw >= 0, with [`Digits::Exact`] every digit
 /// of the pose as it is.
 pub fn pose_line(t: f64, pose: &Isometry3<f64>, digits: Digits) -> String {
-    let v = pose.translation.vector;
-    let mut q = *pose.rotation.quaternion();
-    match digits {
-        Digits::Dataset => {
-            if q.w < 0.0 {
-                q = -q;
-            }
-            format!(
-                "{t:.6} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9} {:.9}",
-                v.x, v.y, v.z, q.i, q.j, q.k, q.w
-            )
-        }
-        Digits::Exact => format!(
-            "{t} {} {} {} {} {} {} {}",
-            v.x, v.y, v.z, q.i, q.j, q.k, q.w
-        ),
-    }
+    let ([x, y, z], [qx, qy, qz, qw]) = digits.pose_values(pose);
+    format!("{} {x} {y} {z} {qx} {qy} {qz} {qw}", stamp_text(t, digits))
 }
 
 /// Writes `rgb.txt`, `depth.txt`, `associations.txt` and (when there is one) `groundtruth.txt`
