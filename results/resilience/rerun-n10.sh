@@ -15,10 +15,12 @@ SYSTEMS=orb,mcor,avc,mcor+avc,rc
   --perturb jpeg:0,90,50,20,5 --perturb occluders:0,1,2,4,8 --perturb stereo-misalignment:0,0.1,0.2,0.5,1 \
   --quiet --out results/resilience/euroc-real-n10
 "$NF" table results/resilience/euroc-real-n10
-# 2. fr2_coke's twin where depth noise does break it, and the cells left unrun before.
+# 2. fr2_coke's twin where depth noise does break it, and the cells left unrun before. The
+#    cheap axes first: a run at depth-axial 512 or 1000 makes a keyframe of nearly every frame
+#    (local BA over 230-340 keyframes, 2-5 min a run), so those cells come last.
 "$NF" sweep --seq twin_fr2_coke --frames 400 --configs "$SYSTEMS" --runs 10 --mapping-lag 3 \
-  --perturb depth-axial:0,128,512,1000 --perturb depth-scale:0,5,10,20 --perturb depth-lag:0,2,4,8 \
-  --perturb occluders:0,1,2,4,8 --perturb depth-holes:0,50,80 \
+  --perturb depth-scale:0,5,10,20 --perturb depth-lag:0,2,4,8 --perturb occluders:0,1,2,4,8 \
+  --perturb depth-holes:0,50,80 --perturb depth-axial:0,128,512,1000 \
   --quiet --out results/resilience/coke-breaking-n10
 "$NF" table results/resilience/coke-breaking-n10
 # 3. Three RGB-D twins under axial depth noise up to 128 x Nguyen's sigma.
@@ -26,3 +28,9 @@ SYSTEMS=orb,mcor,avc,mcor+avc,rc
   --runs 10 --mapping-lag 3 --perturb depth-axial:0,1,2,4,8,16,32,64,128 \
   --quiet --out results/resilience/twins-n10
 "$NF" table results/resilience/twins-n10
+# 4. The real ORB-SLAM3 (the pip wheel, systems/orbslam3-pip.toml) beside ours on `kinect`,
+#    n = 10 with paired draws (the n = 3 folder resilience/orbslam3 shared one draw).
+"$NF" sweep --seq kinect --frames 300 --configs "$SYSTEMS",orbslam3pip --config systems/orbslam3-pip.toml \
+  --runs 10 --mapping-lag 3 --perturb occluders:0,1,2,4 --perturb depth-axial:0,4,16,64 \
+  --quiet --out results/resilience/orbslam3-n10
+"$NF" table results/resilience/orbslam3-n10
