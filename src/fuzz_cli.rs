@@ -1,9 +1,9 @@
 //! Fuzz targets of the formats this binary reads itself (issue 45): `runs.csv`,
 //! `sweep-settings.toml`, the config TOML (with its range checks), the `[systems.*]` TOML and a
 //! sweep folder's `systems.toml`, the regression golden file, and a vocabulary file. Their
-//! readers live in this crate, which no other crate can depend on, so the fuzz crate's engine
-//! (std only) is included here by path, with its counting allocator as this test binary's
-//! global allocator.
+//! readers live in this crate, which no other crate can depend on, so the targets are here and
+//! the fuzz crate's engine (a dev-dependency) drives them, with its counting allocator as this
+//! test binary's global allocator.
 //!
 //! `cargo test --bin noisefree fuzz_cli` runs the CI pass (a few thousand fixed-seed inputs a
 //! target); `make fuzz` runs the long pass (`fuzz_cli_long`, ignored by default) for
@@ -16,20 +16,12 @@
 //!   cargo test -p noisefree --bin noisefree fuzz_cli_replay -- --ignored --nocapture
 //! ```
 
-#[path = "../crates/fuzz/src/engine/mod.rs"]
-#[allow(dead_code)]
-mod engine;
-
-use engine::driver::{run, scratch_dir, Limits, Reader, Report, Target};
-use engine::mutate::Mutator;
+use fuzz::engine;
+use fuzz::engine::driver::{run, scratch_dir, Limits, Reader, Report, Target};
 use std::path::Path;
 
 #[global_allocator]
 static ALLOC: engine::alloc::Counting = engine::alloc::Counting;
-
-fn words(list: &[&str]) -> Vec<Vec<u8>> {
-    list.iter().map(|s| s.as_bytes().to_vec()).collect()
-}
 
 /// A reader of the file `name` in a scratch folder; `read` gets the folder and the file.
 fn on_file(
@@ -37,11 +29,8 @@ fn on_file(
     read: impl Fn(&Path, &Path) -> anyhow::Result<()> + Send + Sync + 'static,
 ) -> Reader {
     let dir = scratch_dir("cli");
-    Box::new(move |bytes: &[u8]| {
-        let path = dir.join(name);
-        std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-        read(&dir, &path).map_err(|e| format!("{e:#}"))
-    })
+    let path = dir.join(name);
+    engine::driver::on_file(path, move |p| read(&dir, p).map_err(|e| format!("{e:#}")))
 }
 
 /// Bytes the TOML and CSV readers may hold per input byte. The `toml` and `csv` crates keep
@@ -59,15 +48,15 @@ fn target(
     dictionary: &[&str],
     read: Reader,
 ) -> Target {
-    Target {
+    Target::new(
         name,
         about,
         file,
-        mutator: Mutator::new(seeds, words(dictionary)),
-        fixup: None,
-        alloc_factor: TOKEN_ALLOC_FACTOR,
+        seeds,
+        dictionary,
+        TOKEN_ALLOC_FACTOR,
         read,
-    }
+    )
 }
 
 /// The first `n` lines of `text`.

@@ -225,9 +225,32 @@ fn describe(img: &DynamicImage) -> String {
     }
 }
 
+/// The CRC-32 a PNG chunk carries over its type and data (IEEE 802.3, as the PNG
+/// specification computes it): for the tests and fuzzers that build or repair PNG files.
+pub fn png_crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &x in bytes {
+        c ^= u32::from(x);
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_crc_of_the_iend_chunk_every_png_ends_with() {
+        assert_eq!(png_crc32(b"IEND"), 0xae42_6082);
+        assert_eq!(png_crc32(b""), 0);
+    }
 
     #[test]
     fn bt601_weights() {
@@ -270,7 +293,7 @@ mod tests {
             .unwrap();
         let mut b = std::fs::read(&p).unwrap();
         b[16..24].copy_from_slice(&[0, 0, 0xff, 0xff, 0, 0, 0xff, 0xff]);
-        let crc = crc32(&b[12..29]);
+        let crc = png_crc32(&b[12..29]);
         b[29..33].copy_from_slice(&crc.to_be_bytes());
         std::fs::write(&p, &b).unwrap();
         let e = read_gray(&p).unwrap_err().to_string();
@@ -293,7 +316,7 @@ mod tests {
         // As many pixels as the old check let through (90 % of 8256 a byte), 6 bytes each.
         let width = (0.9 * (MAX_DECODED_BYTES_PER_BYTE * b.len() as u64) as f64 / 16.0) as u32;
         b[16..20].copy_from_slice(&width.to_be_bytes());
-        let crc = crc32(&b[12..29]);
+        let crc = png_crc32(&b[12..29]);
         b[29..33].copy_from_slice(&crc.to_be_bytes());
         std::fs::write(&p, &b).unwrap();
         let e = read_depth(&p, 5000.0).unwrap_err().to_string();
@@ -330,25 +353,10 @@ mod tests {
         let mut whole = png.to_vec();
         whole[36] = 6;
         whole.remove(47);
-        let crc = crc32(&whole[37..47]);
+        let crc = png_crc32(&whole[37..47]);
         whole[47..51].copy_from_slice(&crc.to_be_bytes());
         std::fs::write(&p, &whole).unwrap();
         let e = read_gray(&p).map(|_| ()).unwrap_err().to_string();
         assert!(!e.contains("PLTE"), "{e}");
-    }
-
-    fn crc32(b: &[u8]) -> u32 {
-        let mut c = 0xffff_ffffu32;
-        for &x in b {
-            c ^= u32::from(x);
-            for _ in 0..8 {
-                c = if c & 1 != 0 {
-                    0xedb8_8320 ^ (c >> 1)
-                } else {
-                    c >> 1
-                };
-            }
-        }
-        !c
     }
 }

@@ -3,6 +3,7 @@
 //! every mutation of these formats would stop at the checksum test, which is worth fuzzing once
 //! and not a million times.
 
+use datasets::decode::png_crc32;
 use slam_core::hash::fnv1a;
 
 /// Rewrites the last 8 bytes of a binary vocabulary as the checksum of the bytes before them.
@@ -12,22 +13,6 @@ pub fn vocabulary_checksum(b: &mut [u8]) {
         let sum = fnv1a(&b[..n]);
         b[n..].copy_from_slice(&sum.to_le_bytes());
     }
-}
-
-/// CRC-32 (IEEE, as PNG uses it).
-pub fn crc32(b: &[u8]) -> u32 {
-    let mut c = 0xffff_ffffu32;
-    for &x in b {
-        c ^= u32::from(x);
-        for _ in 0..8 {
-            c = if c & 1 != 0 {
-                0xedb8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
 }
 
 /// Recomputes the CRC of every whole chunk of a PNG (signature, then length, type, data, CRC),
@@ -42,7 +27,7 @@ pub fn png_crcs(b: &mut [u8]) {
         if end + 4 > b.len() {
             return;
         }
-        let crc = crc32(&b[at + 4..end]);
+        let crc = png_crc32(&b[at + 4..end]);
         b[end..end + 4].copy_from_slice(&crc.to_be_bytes());
         at = end + 4;
     }
@@ -63,7 +48,7 @@ mod tests {
     #[test]
     fn crc32_of_the_png_iend_chunk() {
         // Every PNG ends with the same IEND chunk: type `IEND`, no data, CRC ae426082.
-        assert_eq!(crc32(b"IEND"), 0xae42_6082);
+        assert_eq!(png_crc32(b"IEND"), 0xae42_6082);
         let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\0IEND\0\0\0\0".to_vec();
         png_crcs(&mut png);
         assert_eq!(&png[16..], &[0xae, 0x42, 0x60, 0x82]);
@@ -73,6 +58,6 @@ mod tests {
         assert_eq!(jpeg, before);
         png[12] = b'X';
         png_crcs_if_png(&mut png);
-        assert_eq!(&png[16..], &crc32(b"XEND").to_be_bytes());
+        assert_eq!(&png[16..], &png_crc32(b"XEND").to_be_bytes());
     }
 }

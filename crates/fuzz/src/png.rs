@@ -5,7 +5,7 @@
 //! is deflate's stored blocks (no compression), so the files are small only because the
 //! images are; `seeds/png-*.png` are its output ([`seeds`]), checked by the fuzz crate's tests.
 
-use crate::fixup::crc32;
+use datasets::decode::png_crc32;
 
 /// PNG colour types.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -185,7 +185,7 @@ fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
     let start = out.len();
     out.extend_from_slice(kind);
     out.extend_from_slice(data);
-    let crc = crc32(&out[start..]);
+    let crc = png_crc32(&out[start..]);
     out.extend_from_slice(&crc.to_be_bytes());
 }
 

@@ -6,7 +6,6 @@
 //! own writers produce.
 
 use crate::engine::driver::{scratch_dir, Target};
-use crate::engine::mutate::Mutator;
 use crate::fixup;
 use ate_eval::io as traj;
 use ate_eval::{AssociationMode, AteOptions, RpeDelta, StampPolicy};
@@ -23,23 +22,15 @@ macro_rules! seed {
     };
 }
 
-fn words(list: &[&str]) -> Vec<Vec<u8>> {
-    list.iter().map(|s| s.as_bytes().to_vec()).collect()
-}
-
-/// A reader of a file named `name`: the input is written there, then `read` runs on the path.
+/// A reader of a file named `name` in this process's scratch folder.
 fn on_file(
     name: &'static str,
     read: impl Fn(&Path) -> Result<(), String> + Send + Sync + 'static,
 ) -> crate::engine::driver::Reader {
-    let dir = scratch_dir("lib");
-    let path = dir.join(name);
-    Box::new(move |bytes: &[u8]| {
-        std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-        read(&path)
-    })
+    crate::engine::driver::on_file(scratch_dir("lib").join(name), read)
 }
 
+/// A target of the crate's readers: 16 bytes live per input byte at most.
 fn target(
     name: &'static str,
     about: &'static str,
@@ -48,15 +39,7 @@ fn target(
     dictionary: &[&str],
     read: crate::engine::driver::Reader,
 ) -> Target {
-    Target {
-        name,
-        about,
-        file,
-        mutator: Mutator::new(seeds, words(dictionary)),
-        fixup: None,
-        alloc_factor: 16.0,
-        read,
-    }
+    Target::new(name, about, file, seeds, dictionary, 16.0, read)
 }
 
 fn e(err: impl std::fmt::Display) -> String {

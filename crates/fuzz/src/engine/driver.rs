@@ -46,6 +46,44 @@ pub struct Target {
     pub read: Reader,
 }
 
+impl Target {
+    /// A target without a fixup: `seeds` mutated with the words of `dictionary`, `read` run on
+    /// every input, at most `alloc_factor` bytes live per input byte.
+    pub fn new(
+        name: &'static str,
+        about: &'static str,
+        file: &'static str,
+        seeds: Vec<Vec<u8>>,
+        dictionary: &[&str],
+        alloc_factor: f64,
+        read: Reader,
+    ) -> Target {
+        Target {
+            name,
+            about,
+            file,
+            mutator: Mutator::new(
+                seeds,
+                dictionary.iter().map(|w| w.as_bytes().to_vec()).collect(),
+            ),
+            fixup: None,
+            alloc_factor,
+            read,
+        }
+    }
+}
+
+/// A reader of files: each input is written to `path`, then `read` runs on it.
+pub fn on_file(
+    path: PathBuf,
+    read: impl Fn(&Path) -> Result<(), String> + Send + Sync + 'static,
+) -> Reader {
+    Box::new(move |bytes: &[u8]| {
+        std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        read(&path)
+    })
+}
+
 /// Bounds an input is held to, and when to stop.
 #[derive(Clone, Debug)]
 pub struct Limits {
