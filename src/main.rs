@@ -1,6 +1,9 @@
-//! `noisefree`: the command-line front of the workspace. It parses arguments, reads and writes
-//! files, shows progress and prints reports; all the work lives in the library crates
-//! (`slam-core`, `ate-eval`, `datasets`, `synth`).
+//! `noisefree`: the command line of the workspace. `commands/` holds each subcommand's arguments
+//! and a short `run`; the modules beside it do the CLI's own work (plan, run and record a sweep,
+//! report its tables and findings, match a difficulty, regress, bench, run external systems);
+//! the rest lives in the library crates: `slam-core` (the SLAM system), `ate-eval` (trajectories
+//! and ATE), `datasets` (readers, the writer, the catalog), `synth` (synthetic sequences) and
+//! `perturb` (perturbations); `fuzz` drives the fuzz targets of the formats read here.
 
 mod analysis;
 mod bench;
