@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use slam_core::system::{AvcParams, ClusterViews, Config, McorParams, RigidConsensusParams};
 use slam_core::techniques::params::AvcAim;
 use slam_core::SensorKind;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The default configuration for a sensor: ORB-SLAM2's TUM RGB-D or EuRoC stereo settings.
 pub fn base_config(sensor: SensorKind) -> Config {
@@ -51,6 +51,16 @@ pub fn vocabulary_in_file(path: &Path) -> Result<Option<std::path::PathBuf>> {
             path.display()
         ),
     }
+}
+
+/// The vocabulary a run is asked to use: the `--vocabulary` flag, else the `vocabulary` of the
+/// `--config` file; `None`: the built-in one.
+pub fn vocabulary_asked(flag: Option<&Path>, config: Option<&Path>) -> Result<Option<PathBuf>> {
+    Ok(match (flag, config) {
+        (Some(v), _) => Some(v.to_path_buf()),
+        (None, Some(c)) => vocabulary_in_file(c)?,
+        (None, None) => None,
+    })
 }
 
 /// Overlays the TOML file at `path` (any subset of the fields of `Config`, plus `vocabulary`,

@@ -727,3 +727,25 @@ fn perturb_takes_the_shared_synthetic_flags_as_synth_and_run_do() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An output folder that holds anything is refused with the writer's own error, and what it
+/// holds is left as it was.
+#[test]
+fn perturb_refuses_an_occupied_output_folder_and_leaves_it_as_it_was() {
+    let dir = tmpdir("perturb-occupied");
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "mine").unwrap();
+    let o = out.to_str().unwrap();
+    assert_clean_failure(
+        &noisefree(&["perturb", "--perturb", "depth-axial:1", "-o", o, "--quiet"]),
+        "the output folder exists and is not empty",
+    );
+    let left: Vec<_> = std::fs::read_dir(&out).unwrap().flatten().collect();
+    assert_eq!(left.len(), 1);
+    assert_eq!(
+        std::fs::read_to_string(out.join("keep.txt")).unwrap(),
+        "mine"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -113,9 +113,7 @@ pub fn run(args: PerturbArgs) -> Result<()> {
     let chain = Chain::parse(args.perturb.as_deref().unwrap_or("")).context("--perturb")?;
     let out = args.out.clone().context("--out is required")?;
     // Refused before the work starts, as the writer would refuse it at the end.
-    if out.exists() && std::fs::read_dir(&out)?.next().is_some() {
-        return Err(datasets::DatasetError::OutputExists { path: out }.into());
-    }
+    datasets::write::files::refuse_occupied(&out)?;
     let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
     let opts = args.sequence.load_options(args.camera.clone());
     let catalog = datasets::Catalog::embedded();

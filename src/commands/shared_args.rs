@@ -2,7 +2,7 @@
 //! with one help text, so `run`, `sweep`, `perturb` and `match` cannot drift apart on what
 //! `--frames` or `--mapping-lag` means.
 
-use crate::config_file::{vocabulary_in_file, Switches};
+use crate::config_file::{vocabulary_asked, Switches};
 use crate::select::LoadOptions;
 use anyhow::Result;
 use std::path::PathBuf;
@@ -83,11 +83,7 @@ impl SystemArgs {
     /// The vocabulary asked for: `--vocabulary`, else the `--config` file's `vocabulary`;
     /// `None`: the built-in one.
     pub fn vocabulary_flag(&self) -> Result<Option<PathBuf>> {
-        Ok(match (&self.vocabulary, &self.config) {
-            (Some(v), _) => Some(v.clone()),
-            (None, Some(c)) => vocabulary_in_file(c)?,
-            (None, None) => None,
-        })
+        vocabulary_asked(self.vocabulary.as_deref(), self.config.as_deref())
     }
 }
 

@@ -175,11 +175,8 @@ pub fn settle_folder(req: &SweepRequest, plan: &Plan) -> Result<Folder> {
         (None, Some(c)) => c.mapping_lag,
         (None, None) => 0,
     };
-    let vocab_flag = match (&req.vocabulary, &req.config) {
-        (Some(v), _) => Some(v.clone()),
-        (None, Some(c)) => crate::config_file::vocabulary_in_file(c)?,
-        (None, None) => None,
-    };
+    let vocab_flag =
+        crate::config_file::vocabulary_asked(req.vocabulary.as_deref(), req.config.as_deref())?;
     let vocabulary = crate::vocab_file::choose(vocab_flag.as_deref())?;
     let loop_closing_on = match &file_config {
         _ if req.no_loop_closing => false,

@@ -29,8 +29,9 @@ pub fn write_atomically<E: From<DatasetError>>(
     }
 }
 
-/// Creates the staging folder of `target` after checking that `target` is absent or empty.
-fn stage(target: &Path) -> Result<PathBuf, DatasetError> {
+/// Refuses an output folder that exists and is not empty ([`DatasetError::OutputExists`]): what
+/// [`write_atomically`] checks first, for a caller that wants to refuse before its work starts.
+pub fn refuse_occupied(target: &Path) -> Result<(), DatasetError> {
     if target.exists() {
         let mut entries = fs::read_dir(target).map_err(|e| DatasetError::io(target, e))?;
         if entries.next().is_some() {
@@ -39,6 +40,12 @@ fn stage(target: &Path) -> Result<PathBuf, DatasetError> {
             });
         }
     }
+    Ok(())
+}
+
+/// Creates the staging folder of `target` after checking that `target` is absent or empty.
+fn stage(target: &Path) -> Result<PathBuf, DatasetError> {
+    refuse_occupied(target)?;
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
