@@ -495,6 +495,7 @@ fn match_bisects_to_a_target_and_says_when_it_is_out_of_reach() {
         json["result"]["status"]["at_high"].as_f64().unwrap(),
     );
     assert!(high > low, "{low} {high}");
+    let far_csv = std::fs::read_to_string(out.join("match.csv")).unwrap();
     let target = format!("{}", (low + high) / 2.0);
     let mut args = base.to_vec();
     args.extend(["--target", &target, "--tolerance", "0.2"]);
@@ -506,12 +507,27 @@ fn match_bisects_to_a_target_and_says_when_it_is_out_of_reach() {
     );
     let steps = String::from_utf8_lossy(&ok.stderr);
     assert!(steps.matches("median").count() >= 3, "{steps}");
+    // The two ends were measured by the first match into this folder: reused, not run again,
+    // and their runs' ATEs are the same to the last digit.
+    assert!(
+        steps.contains("2 level(s) measured before, reused"),
+        "{steps}"
+    );
+    assert_eq!(steps.matches("; recorded)").count(), 2, "{steps}");
+    let csv = std::fs::read_to_string(out.join("match.csv")).unwrap();
+    let ends = |text: &str| -> Vec<String> {
+        text.lines()
+            .filter(|l| l.starts_with("0,") || l.starts_with("1,"))
+            .map(str::to_string)
+            .collect()
+    };
+    assert_eq!(ends(&csv), ends(&far_csv));
+    assert_eq!(ends(&csv).len(), 4, "{csv}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap()).unwrap();
     assert_eq!(json["result"]["status"]["status"], "matched");
     let level = json["result"]["status"]["level"].as_f64().unwrap();
     assert!(level > 0.0 && level < 20.0, "{level}");
-    let csv = std::fs::read_to_string(out.join("match.csv")).unwrap();
     assert!(csv.lines().count() > 2 * 3, "{csv}");
     // A twin's chain and target come from the sequence it imitates; a non-twin needs both.
     assert_clean_failure(

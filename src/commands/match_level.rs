@@ -1,9 +1,11 @@
 //! `noisefree match`: the level of a camera chain (or one family) at which the baseline's
 //! median ATE on a sequence equals a target, by bisection, each step printed; `match.json`
-//! and `match.csv` (every run of every step) written to `--out`.
+//! and `match.csv` (every run of every step) written to `--out`, and `levels.jsonl` there as
+//! each level ends, so a stopped match resumes where it stopped.
 
 use crate::commands::shared_args::SequenceArgs;
 use crate::config_file::{base_config, overlay_file};
+use crate::difficulty::level_log::{self, Found, LevelLog};
 use crate::difficulty::request::{self, mm};
 use crate::difficulty::{bisect, LevelOutcome, MatchSetup};
 use crate::runner::remembering;
@@ -53,7 +55,8 @@ pub struct MatchArgs {
     /// The sequence's length, synthetic seed and ablated effects, and the data root.
     #[command(flatten)]
     pub sequence: SequenceArgs,
-    /// Where `match.json` and `match.csv` go [default: noisefree-out/match-<sequence>].
+    /// Where `match.json`, `match.csv` and `levels.jsonl` go (a match into a folder that holds
+    /// the levels of the same setup reuses them) [default: noisefree-out/match-<sequence>].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Print only the result.
@@ -113,12 +116,42 @@ pub fn run(args: MatchArgs) -> Result<()> {
             args.tolerance * 100.0
         );
     }
-    let started = std::time::Instant::now();
-    let result = bisect_in_pool(&args, &setup, target, high, started)?;
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("noisefree-out").join(format!("match-{label}")));
+    // What a level's runs depend on: the log's levels are reused only under the same.
+    let log_setup = serde_json::json!({
+        "sequence": label,
+        "frames": frames.len(),
+        "synth_seed": args.sequence.synth_seed,
+        "synth_without": args.sequence.synth_without,
+        "chain": subject.name(),
+        "runs": args.runs,
+        "perturb_seed": args.perturb_seed,
+        "config": config,
+        "vocabulary": vocabulary.identity,
+        "noisefree": env!("CARGO_PKG_VERSION"),
+    });
+    let (mut log, found) = LevelLog::open(&out, &log_setup)?;
+    if !args.quiet {
+        let file = out.join(level_log::FILE_NAME);
+        match found {
+            Found::Levels(n) if n > 0 => {
+                eprintln!(
+                    "  {n} level(s) measured before, reused from {}",
+                    file.display()
+                )
+            }
+            Found::OtherSetup => eprintln!(
+                "  {} was written for another setup: its levels are not reused",
+                file.display()
+            ),
+            _ => {}
+        }
+    }
+    let started = std::time::Instant::now();
+    let result = bisect_in_pool(&args, &setup, target, high, &mut log, started)?;
     let json = serde_json::json!({
         "sequence": label,
         "chain": subject.name(),
@@ -137,13 +170,14 @@ pub fn run(args: MatchArgs) -> Result<()> {
     Ok(())
 }
 
-/// The bisection on `--jobs` threads, each level measured printed (unless `--quiet`) with the
-/// time since `started`.
+/// The bisection on `--jobs` threads, each level printed (unless `--quiet`) with the time
+/// since `started`, or `recorded` when it came from the log.
 fn bisect_in_pool(
     args: &MatchArgs,
     setup: &MatchSetup<'_>,
     target: f64,
     high: f64,
+    log: &mut LevelLog,
     started: std::time::Instant,
 ) -> Result<crate::difficulty::MatchResult> {
     let pool = rayon::ThreadPoolBuilder::new()
@@ -159,15 +193,20 @@ fn bisect_in_pool(
             (0.0, high),
             args.max_steps,
             args.tolerance,
-            |o: &LevelOutcome| {
+            log,
+            |o: &LevelOutcome, recorded: bool| {
                 if !quiet {
+                    let when = if recorded {
+                        "recorded".to_string()
+                    } else {
+                        format!("{:.0} s", started.elapsed().as_secs_f64())
+                    };
                     eprintln!(
-                        "  {subject}:{:<8} median {} ({} of {} runs failed; {:.0} s)",
+                        "  {subject}:{:<8} median {} ({} of {} runs failed; {when})",
                         o.level,
                         mm(o.median),
                         o.failed(),
                         o.ates.len(),
-                        started.elapsed().as_secs_f64()
                     );
                 }
             },

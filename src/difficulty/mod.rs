@@ -10,8 +10,10 @@
 //! infinite median.
 //!
 //! [`request`] resolves what `noisefree match` asks (chain, target, range) and writes what it
-//! leaves (`match.json`, `match.csv`, the verdict).
+//! leaves (`match.json`, `match.csv`, the verdict); [`level_log`] keeps every level measured,
+//! so a stopped match resumes and a second one reuses them.
 
+pub mod level_log;
 pub mod request;
 
 use crate::runner::{run_extracted, ExtractedSequence};
@@ -151,21 +153,29 @@ pub struct MatchResult {
 
 /// Bisects the level in `[low, high]` at which the median ATE equals `target` (metres), at
 /// most `max_steps` levels between the ends, stopping once a median is within `tolerance`
-/// (relative) of the target. `on_step` sees each level as it is measured. Assumes the median
-/// grows with the level; where noise breaks that, it still ends at a level whose median
-/// crosses the target between two measured neighbours.
+/// (relative) of the target. A level in `log` is taken from it rather than measured again;
+/// a level measured is added to it. `on_step` sees each level (and whether it came from the
+/// log). Assumes the median grows with the level; where noise breaks that, it still ends at a
+/// level whose median crosses the target between two measured neighbours.
 pub fn bisect(
     setup: &MatchSetup<'_>,
     target: f64,
     range: (f64, f64),
     max_steps: usize,
     tolerance: f64,
-    mut on_step: impl FnMut(&LevelOutcome),
+    log: &mut level_log::LevelLog,
+    mut on_step: impl FnMut(&LevelOutcome, bool),
 ) -> Result<MatchResult> {
     bisect_with(
         |level| {
+            if let Some(o) = log.recorded(level) {
+                let o = o.clone();
+                on_step(&o, true);
+                return Ok(o);
+            }
             let o = measure_level(setup, level)?;
-            on_step(&o);
+            log.record(&o)?;
+            on_step(&o, false);
             Ok(o)
         },
         target,
