@@ -53,11 +53,12 @@ pub const FIELD_CACHE: usize = 16;
 
 /// A smooth field over a `w x h` image with values in [-1, 1] reaching +-1: a sum of six
 /// separable cosines with periods between one and four image sizes, drawn from `key`.
-/// Returned as (row factors, column factors, normaliser) so a pixel costs six products.
+/// Built as (row factors, column factors, normaliser), six products a pixel, and kept as the
+/// value of every pixel: a field serves every frame of a sequence, so a frame reads it rather
+/// than computing it again.
 pub struct SmoothField {
-    cols: Vec<[f64; 6]>,
-    rows: Vec<[f64; 6]>,
-    scale: f64,
+    w: usize,
+    values: Vec<f64>,
 }
 
 impl SmoothField {
@@ -81,19 +82,19 @@ impl SmoothField {
                 r[k] = (tau * v as f64 / py + fy).cos();
             }
         }
-        let mut field = SmoothField {
-            cols,
-            rows,
-            scale: 1.0,
+        let sum = |u: usize, v: usize| -> f64 {
+            let (c, r) = (&cols[u], &rows[v]);
+            (0..6).map(|k| c[k] * r[k]).sum::<f64>()
         };
         let mut max = 0.0f64;
         for v in 0..h {
             for u in 0..w {
-                max = max.max(field.at(u, v).abs());
+                max = max.max(sum(u, v).abs());
             }
         }
-        field.scale = if max > 0.0 { 1.0 / max } else { 0.0 };
-        field
+        let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
+        let values = (0..w * h).map(|i| sum(i % w, i / w) * scale).collect();
+        SmoothField { w, values }
     }
 
     /// The field of `key` for a `w x h` image, built once per process and shared: a
@@ -101,41 +102,55 @@ impl SmoothField {
     /// not change from frame to frame), and building it costs a pass over the image. The last
     /// [`FIELD_CACHE`] fields are kept.
     pub fn shared(seed: u64, stream: FieldStream, w: usize, h: usize) -> Arc<SmoothField> {
-        type Cache = Mutex<Vec<((u64, FieldStream, usize, usize), Arc<SmoothField>)>>;
-        static CACHE: OnceLock<Cache> = OnceLock::new();
-        let cache = CACHE.get_or_init(Mutex::default);
-        let id = (seed, stream, w, h);
-        if let Some(f) = cache
-            .lock()
-            .ok()
-            .and_then(|c| c.iter().find(|(k, _)| *k == id).map(|(_, f)| f.clone()))
-        {
-            return f;
-        }
-        let key = NoiseKey::new(
-            seed,
-            0,
-            match stream {
-                FieldStream::Range => Stream::Range,
-                FieldStream::Lateral => Stream::Lateral,
-            },
-        );
-        let field = Arc::new(SmoothField::new(key, w, h));
-        if let Ok(mut c) = cache.lock() {
-            if c.len() >= FIELD_CACHE {
-                c.remove(0);
-            }
-            c.push((id, field.clone()));
-        }
-        field
+        static CACHE: SharedCache<(u64, FieldStream, usize, usize), SmoothField> = OnceLock::new();
+        shared(&CACHE, (seed, stream, w, h), FIELD_CACHE, || {
+            let key = NoiseKey::new(
+                seed,
+                0,
+                match stream {
+                    FieldStream::Range => Stream::Range,
+                    FieldStream::Lateral => Stream::Lateral,
+                },
+            );
+            SmoothField::new(key, w, h)
+        })
     }
 
     /// The field at pixel (u, v).
     #[inline]
     pub fn at(&self, u: usize, v: usize) -> f64 {
-        let (c, r) = (&self.cols[u], &self.rows[v]);
-        (0..6).map(|k| c[k] * r[k]).sum::<f64>() * self.scale
+        self.values[v * self.w + u]
     }
+}
+
+/// A process-wide memo of values built once per key (what a sequence's fixed systematic
+/// error needs in every frame), the last few kept.
+type SharedCache<K, V> = OnceLock<Mutex<Vec<(K, Arc<V>)>>>;
+
+/// The value of `key` in `cache`, built by `build` when it is not there (keeping at most
+/// `keep` values, the oldest dropped first).
+fn shared<K: PartialEq, V>(
+    cache: &SharedCache<K, V>,
+    key: K,
+    keep: usize,
+    build: impl FnOnce() -> V,
+) -> Arc<V> {
+    let cache = cache.get_or_init(Mutex::default);
+    if let Some(v) = cache
+        .lock()
+        .ok()
+        .and_then(|c| c.iter().find(|(k, _)| *k == key).map(|(_, v)| v.clone()))
+    {
+        return v;
+    }
+    let value = Arc::new(build());
+    if let Ok(mut c) = cache.lock() {
+        if c.len() >= keep {
+            c.remove(0);
+        }
+        c.push((key, value.clone()));
+    }
+    value
 }
 
 /// `depth-distortion` at `level` percent at 3 m, field drawn from member seed `seed`.
@@ -187,34 +202,80 @@ impl RegistrationWarp {
     }
 }
 
+/// Where `depth-registration` reads each pixel from, for one level, member seed and image
+/// size: the pixel at the end of its warp and the pixels on the way there, each the nearest
+/// pixel of its point (the same in every frame of a sequence, so built once; see
+/// [`RegistrationTable::shared`]).
+pub struct RegistrationTable {
+    /// Points on the way from a pixel to its warped position (`ceil(level)`, at least 1).
+    steps: usize,
+    /// Per pixel, the index read at the warp's end ([`OUTSIDE`] off the image).
+    end: Vec<u32>,
+    /// Per pixel, `steps` indices on the way, the pixel itself first ([`OUTSIDE`] off the image).
+    way: Vec<u32>,
+}
+
+/// A point that falls off the image.
+const OUTSIDE: u32 = u32::MAX;
+
+/// Registration tables [`RegistrationTable::shared`] keeps (one per run in flight).
+const TABLE_CACHE: usize = 4;
+
+impl RegistrationTable {
+    /// The table of `level` pixels for a `w x h` image and member seed `seed`.
+    pub fn new(level: f64, seed: u64, w: usize, h: usize) -> RegistrationTable {
+        let warp = RegistrationWarp::new(level, seed, w, h);
+        let index = |x: f64, y: f64| -> u32 {
+            let (x, y) = (x.round(), y.round());
+            if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+                return OUTSIDE;
+            }
+            (y as usize * w + x as usize) as u32
+        };
+        let steps = level.ceil().max(1.0) as usize;
+        let mut end = Vec::with_capacity(w * h);
+        let mut way = Vec::with_capacity(w * h * steps);
+        for i in 0..w * h {
+            let (u, v) = (i % w, i / w);
+            let (dx, dy) = warp.at(u, v);
+            end.push(index(u as f64 + dx, v as f64 + dy));
+            for s in 0..steps {
+                let t = s as f64 / steps as f64;
+                way.push(index(u as f64 + t * dx, v as f64 + t * dy));
+            }
+        }
+        RegistrationTable { steps, end, way }
+    }
+
+    /// The table of `level`, `seed` and size, built once per process and shared by every frame
+    /// (the last [`TABLE_CACHE`] kept).
+    pub fn shared(level: f64, seed: u64, w: usize, h: usize) -> Arc<RegistrationTable> {
+        static CACHE: SharedCache<(u64, u64, usize, usize), RegistrationTable> = OnceLock::new();
+        shared(&CACHE, (level.to_bits(), seed, w, h), TABLE_CACHE, || {
+            RegistrationTable::new(level, seed, w, h)
+        })
+    }
+}
+
 /// `depth-registration` at `level` pixels, warp drawn from member seed `seed`.
 pub fn depth_registration(depth: &DepthImage, level: f64, seed: u64) -> DepthImage {
     let (w, h) = (depth.width, depth.height);
-    let warp = RegistrationWarp::new(level, seed, w, h);
+    let table = RegistrationTable::shared(level, seed, w, h);
     let src = &depth.data;
-    let sample = |x: f64, y: f64| -> Option<f32> {
-        let (x, y) = (x.round(), y.round());
-        if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
-            return None;
-        }
-        Some(src[y as usize * w + x as usize])
-    };
-    let steps = level.ceil().max(1.0) as usize;
-    let data = (0..w * h)
-        .map(|i| {
-            let (u, v) = (i % w, i / w);
-            let (dx, dy) = warp.at(u, v);
-            let Some(z) = sample(u as f64 + dx, v as f64 + dy) else {
+    let data = table
+        .end
+        .iter()
+        .zip(table.way.chunks_exact(table.steps))
+        .map(|(&end, way)| {
+            if end == OUTSIDE {
                 return 0.0;
-            };
+            }
             // The nearest surface on the way, where it is a different (nearer) one.
-            let mut best = z;
-            for s in 0..steps {
-                let t = s as f64 / steps as f64;
-                if let Some(zs) = sample(u as f64 + t * dx, v as f64 + t * dy) {
-                    if zs > 0.0 && (best <= 0.0 || (zs as f64) < 0.95 * best as f64) {
-                        best = zs;
-                    }
+            let mut best = src[end as usize];
+            for &p in way.iter().filter(|&&p| p != OUTSIDE) {
+                let zs = src[p as usize];
+                if zs > 0.0 && (best <= 0.0 || (zs as f64) < 0.95 * best as f64) {
+                    best = zs;
                 }
             }
             best
@@ -302,6 +363,104 @@ mod tests {
 #[cfg(test)]
 mod shared_field_tests {
     use super::*;
+
+    /// `depth-registration` as defined, every point's nearest pixel found per frame: what the
+    /// table must reproduce bit for bit.
+    fn registration_by_definition(depth: &DepthImage, level: f64, seed: u64) -> DepthImage {
+        let (w, h) = (depth.width, depth.height);
+        let warp = RegistrationWarp::new(level, seed, w, h);
+        let src = &depth.data;
+        let sample = |x: f64, y: f64| -> Option<f32> {
+            let (x, y) = (x.round(), y.round());
+            if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+                return None;
+            }
+            Some(src[y as usize * w + x as usize])
+        };
+        let steps = level.ceil().max(1.0) as usize;
+        let data = (0..w * h)
+            .map(|i| {
+                let (u, v) = (i % w, i / w);
+                let (dx, dy) = warp.at(u, v);
+                let Some(z) = sample(u as f64 + dx, v as f64 + dy) else {
+                    return 0.0;
+                };
+                let mut best = z;
+                for s in 0..steps {
+                    let t = s as f64 / steps as f64;
+                    if let Some(zs) = sample(u as f64 + t * dx, v as f64 + t * dy) {
+                        if zs > 0.0 && (best <= 0.0 || (zs as f64) < 0.95 * best as f64) {
+                            best = zs;
+                        }
+                    }
+                }
+                best
+            })
+            .collect();
+        DepthImage {
+            width: w,
+            height: h,
+            data,
+        }
+    }
+
+    #[test]
+    fn registration_through_its_table_is_the_definition_bit_for_bit() {
+        let (w, h) = (97, 61);
+        // Steps, slopes and holes, so the nearer-surface rule and the image border both act.
+        let data = (0..w * h)
+            .map(|i| {
+                let (u, v) = (i % w, i / w);
+                match (u * 7 + v * 3) % 23 {
+                    0 | 1 => 0.0,
+                    k if u > w / 2 => 1.0 + 0.013 * k as f32 + 0.002 * v as f32,
+                    k => 2.5 - 0.011 * k as f32,
+                }
+            })
+            .collect();
+        let depth = DepthImage {
+            width: w,
+            height: h,
+            data,
+        };
+        for (level, seed) in [(0.3, 1), (1.0, 2), (2.5, 3), (6.0, 4), (13.7, 5)] {
+            let table = depth_registration(&depth, level, seed);
+            let direct = registration_by_definition(&depth, level, seed);
+            let bits = |d: &DepthImage| d.data.iter().map(|z| z.to_bits()).collect::<Vec<_>>();
+            let differ = |a: &DepthImage, b: &DepthImage| bits(a) != bits(b);
+            assert!(!differ(&table, &direct), "level {level}");
+            // Below half a pixel nothing moves; from a pixel on the warp does.
+            assert_eq!(differ(&table, &depth), level >= 1.0, "level {level}");
+            // Again from the shared table: the same.
+            assert!(!differ(&depth_registration(&depth, level, seed), &direct));
+        }
+    }
+
+    #[test]
+    fn a_stored_field_is_its_sum_of_cosines() {
+        // The definition, written out: six separable cosines drawn from the key, divided by
+        // the largest magnitude over the image.
+        let (w, h) = (40, 30);
+        let key = NoiseKey::new(3, 0, Stream::Range);
+        let tau = std::f64::consts::TAU;
+        let raw = |u: usize, v: usize| -> f64 {
+            (0..6)
+                .map(|k| {
+                    let i = 8 * k as u64;
+                    let px = w as f64 * (1.0 + 3.0 * key.uniform(i));
+                    let py = h as f64 * (1.0 + 3.0 * key.uniform(i + 1));
+                    let (fx, fy) = (tau * key.uniform(i + 2), tau * key.uniform(i + 3));
+                    let amp = 0.5 + key.uniform(i + 4);
+                    amp * (tau * u as f64 / px + fx).cos() * (tau * v as f64 / py + fy).cos()
+                })
+                .sum::<f64>()
+        };
+        let max = (0..w * h).fold(0.0f64, |m, i| m.max(raw(i % w, i / w).abs()));
+        let f = SmoothField::new(key, w, h);
+        for (u, v) in [(0, 0), (17, 3), (39, 29), (5, 22)] {
+            assert_eq!(f.at(u, v).to_bits(), (raw(u, v) * (1.0 / max)).to_bits());
+        }
+    }
 
     #[test]
     fn a_shared_field_is_the_field_built_afresh() {
