@@ -242,3 +242,14 @@ fn fetch_list_lines_up_its_columns_and_names_what_each_twin_imitates() {
     assert_eq!(column(row("fr1_desk"), 0), "easy");
     assert_eq!(column(row("twin_fr1_desk"), 1), "-");
 }
+
+#[test]
+fn a_frame_cache_cap_that_is_not_a_number_is_refused_before_anything_runs() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_noisefree"))
+        .args(["run", "--seq", "kinect", "--frames", "3"])
+        .envs([common::synth_cache_env(), (synth::CACHE_LIMIT_ENV, "lots")])
+        .output()
+        .expect("binary runs");
+    assert_clean_failure(&out, "NOISEFREE_SYNTH_CACHE_GB=lots");
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("ATE"));
+}

@@ -46,7 +46,10 @@ pub use motion::handheld::HandHeldPath;
 pub use motion::recorded::RecordedPath;
 pub use motion::trajectory::Trajectory;
 pub use output::contact::{contact_sheet, write_contact_sheet};
-pub use output::frame_cache::{cache_dir_from_env, CachedFrames, CACHE_ENV};
+pub use output::frame_cache::{
+    cache_dir_from_env, cache_limit_from_env, CachedFrames, CACHE_ENV, CACHE_LIMIT_ENV,
+    DEFAULT_LIMIT_GB,
+};
 pub use sensor::depth::{
     AxialNoise, BlobHoles, DepthLag, DepthNoise, DisparityQuantisation, FlyingPixels, Holes,
     LateralNoise, Misregistration, SystematicDistortion,

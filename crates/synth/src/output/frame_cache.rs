@@ -15,6 +15,7 @@
 //! is rendered, and a folder that cannot be written only costs the renders.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use crate::hash::mix64;
@@ -30,6 +31,29 @@ pub const CODE_FINGERPRINT: &str = env!("SYNTH_CODE_FINGERPRINT");
 /// The environment variable naming a frame-cache folder for the command-line tool (unset: no
 /// cache). The test suites set it so that their processes share renders.
 pub const CACHE_ENV: &str = "NOISEFREE_SYNTH_CACHE";
+
+/// The environment variable capping what processes add to a frame cache, in gigabytes
+/// (default [`DEFAULT_LIMIT_GB`]).
+pub const CACHE_LIMIT_ENV: &str = "NOISEFREE_SYNTH_CACHE_GB";
+
+/// The default cap on a frame cache's size, gigabytes: a twin of a whole sequence is 1-7 GB
+/// of frames, every twin of Table III about 100 GB, more than many disks have free.
+pub const DEFAULT_LIMIT_GB: f64 = 20.0;
+
+/// The cap [`CACHE_LIMIT_ENV`] sets, bytes (the default when it is unset or empty); an error
+/// naming the variable when it is not a number of gigabytes at least 0.
+pub fn cache_limit_from_env() -> Result<u64, String> {
+    let Some(v) = std::env::var_os(CACHE_LIMIT_ENV).filter(|v| !v.is_empty()) else {
+        return Ok((DEFAULT_LIMIT_GB * 1e9) as u64);
+    };
+    let text = v.to_string_lossy();
+    match text.trim().parse::<f64>() {
+        Ok(gb) if gb.is_finite() && gb >= 0.0 => Ok((gb * 1e9) as u64),
+        _ => Err(format!(
+            "{CACHE_LIMIT_ENV}={text}: expected the frame cache's cap in gigabytes (a number >= 0)"
+        )),
+    }
+}
 
 /// The folder named by [`CACHE_ENV`], when it is set and not empty.
 pub fn cache_dir_from_env() -> Option<PathBuf> {
@@ -48,17 +72,33 @@ pub struct CachedFrames {
     gen: Generator,
     dir: Option<Arc<PathBuf>>,
     key: u64,
+    /// Bytes this value (and its clones) may still add to the folder.
+    budget: Arc<AtomicU64>,
 }
 
 impl CachedFrames {
-    /// The frames of `gen`, cached in `dir` (`None`: always rendered). The frames of other
-    /// builds of the renderer are removed from `dir` when this build first uses it.
+    /// The frames of `gen`, cached in `dir` (`None`: always rendered), the folder kept under
+    /// the cap of [`CACHE_LIMIT_ENV`] (an unreadable value counts as the default; the
+    /// command-line tool refuses it first). The frames of other builds of the renderer are
+    /// removed from `dir` when this build first uses it.
     pub fn new(gen: Generator, dir: Option<&Path>) -> Self {
+        let limit = cache_limit_from_env().unwrap_or((DEFAULT_LIMIT_GB * 1e9) as u64);
+        Self::with_limit(gen, dir, limit)
+    }
+
+    /// [`CachedFrames::new`] with a cap of `limit` bytes: frames are stored only while the
+    /// folder (as measured here, plus what this value stored since) stays under it; past it,
+    /// frames are rendered and not stored. Processes writing the same folder at once each
+    /// count from what they found, so together they may pass the cap by what each adds.
+    pub fn with_limit(gen: Generator, dir: Option<&Path>, limit: u64) -> Self {
         let key = dir.map_or(0, |_| generator_key(&gen));
+        let dir = dir.map(|d| Arc::new(build_folder(d)));
+        let used = dir.as_deref().map_or(0, |d| folder_bytes(d));
         CachedFrames {
             gen,
-            dir: dir.map(|d| Arc::new(build_folder(d))),
+            dir,
             key,
+            budget: Arc::new(AtomicU64::new(limit.saturating_sub(used))),
         }
     }
 
@@ -77,10 +117,32 @@ impl CachedFrames {
         }
         let (input, pose) = rendered(&self.gen, index);
         let units = self.gen.config().depth_units_per_metre;
-        // Best effort: a folder that cannot be written costs renders, not results.
-        let _ = ate_eval::io::write_atomic(&path, &encode(self.key, index, &input, &pose, units));
+        let bytes = encode(self.key, index, &input, &pose, units);
+        let size = bytes.len() as u64;
+        let afforded = self
+            .budget
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |b| {
+                b.checked_sub(size)
+            })
+            .is_ok();
+        // Best effort: a folder that is full or cannot be written costs renders, not results.
+        if afforded {
+            let _ = ate_eval::io::write_atomic(&path, &bytes);
+        }
         (input, pose)
     }
+}
+
+/// The bytes of the files directly in `dir` (0 when it cannot be read).
+fn folder_bytes(dir: &Path) -> u64 {
+    std::fs::read_dir(dir).map_or(0, |entries| {
+        entries
+            .flatten()
+            .filter_map(|e| e.metadata().ok())
+            .filter(|m| m.is_file())
+            .map(|m| m.len())
+            .sum()
+    })
 }
 
 /// This build's subfolder of the cache folder `dir`; made, and the other builds' subfolders
@@ -540,6 +602,62 @@ mod tests {
                 .count(),
             1
         );
+    }
+
+    #[test]
+    fn a_full_cache_renders_and_stores_nothing_more() {
+        let dir = tempfile::tempdir().unwrap();
+        let gen = small("kinect");
+        let count = |c: &CachedFrames| {
+            std::fs::read_dir(c.dir.as_deref().unwrap())
+                .unwrap()
+                .count()
+        };
+        // Room for two frames: the third is rendered, the same bits, and not stored.
+        let one = encode(
+            generator_key(&gen),
+            0,
+            &CachedFrames::new(gen.clone(), None).input(0).0,
+            &CachedFrames::new(gen.clone(), None).input(0).1,
+            gen.config().depth_units_per_metre,
+        )
+        .len() as u64;
+        let cached = CachedFrames::with_limit(gen.clone(), Some(dir.path()), 2 * one + one / 2);
+        for i in 0..3 {
+            same(
+                &cached.input(i),
+                &CachedFrames::new(gen.clone(), None).input(i),
+            );
+        }
+        assert_eq!(count(&cached), 2);
+        // A later process finds the folder at its cap and adds nothing; it still reads.
+        let later = CachedFrames::with_limit(gen.clone(), Some(dir.path()), 2 * one + one / 2);
+        later.input(3);
+        assert_eq!(count(&later), 2);
+        same(
+            &later.input(1),
+            &CachedFrames::new(gen.clone(), None).input(1),
+        );
+        // A higher cap lets it store again.
+        let roomier = CachedFrames::with_limit(gen.clone(), Some(dir.path()), 4 * one);
+        roomier.input(3);
+        assert_eq!(count(&roomier), 3);
+    }
+
+    #[test]
+    fn the_cache_cap_is_read_in_gigabytes_and_refused_when_not_a_number() {
+        // One test touches the variable, so no other reads it meanwhile.
+        std::env::set_var(CACHE_LIMIT_ENV, "1.5");
+        assert_eq!(cache_limit_from_env(), Ok(1_500_000_000));
+        std::env::set_var(CACHE_LIMIT_ENV, "");
+        assert_eq!(cache_limit_from_env(), Ok(20_000_000_000));
+        for bad in ["lots", "-1", "NaN"] {
+            std::env::set_var(CACHE_LIMIT_ENV, bad);
+            let e = cache_limit_from_env().unwrap_err();
+            assert!(e.contains(CACHE_LIMIT_ENV) && e.contains(bad), "{e}");
+        }
+        std::env::remove_var(CACHE_LIMIT_ENV);
+        assert_eq!(cache_limit_from_env(), Ok(20_000_000_000));
     }
 
     #[test]
