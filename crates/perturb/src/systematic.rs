@@ -164,7 +164,7 @@ pub fn depth_distortion(depth: &DepthImage, level: f64, units: f64, seed: u64) -
 }
 
 /// `depth` with every valid pixel (index, metres) mapped by `f`; holes stay holes.
-fn map_valid(depth: &DepthImage, f: impl Fn(usize, f64) -> f32) -> DepthImage {
+pub(crate) fn map_valid(depth: &DepthImage, f: impl Fn(usize, f64) -> f32) -> DepthImage {
     DepthImage {
         width: depth.width,
         height: depth.height,
