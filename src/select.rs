@@ -102,9 +102,7 @@ pub fn open(
                 if n == 0 {
                     bail!("--frames must be at least 1");
                 }
-                let cache = synth::cache_dir_from_env();
-                // Its cap is read where frames are stored; refused here, before anything runs.
-                synth::cache_limit_from_env().map_err(anyhow::Error::msg)?;
+                let cache = synth::cache_dir_from_env().map_err(anyhow::Error::msg)?;
                 let (mut s, frames) = datasets::open_synth_cached(&generator, n, cache.as_deref());
                 s.name = entry.name.clone();
                 (s, frames)

@@ -46,8 +46,7 @@ impl SuiteSequence {
         }
         config.motion_scale *= self.motion_scale;
         let generator = synth::Generator::try_new(config, self.synth_seed)?;
-        let cache = synth::cache_dir_from_env();
-        synth::cache_limit_from_env().map_err(anyhow::Error::msg)?;
+        let cache = synth::cache_dir_from_env().map_err(anyhow::Error::msg)?;
         let mut seq = datasets::from_synth_cached(&generator, self.frames, cache.as_deref());
         seq.name = self.label();
         Ok(seq)

@@ -82,18 +82,17 @@ impl SmoothField {
                 r[k] = (tau * v as f64 / py + fy).cos();
             }
         }
-        let sum = |u: usize, v: usize| -> f64 {
-            let (c, r) = (&cols[u], &rows[v]);
-            (0..6).map(|k| c[k] * r[k]).sum::<f64>()
-        };
-        let mut max = 0.0f64;
-        for v in 0..h {
-            for u in 0..w {
-                max = max.max(sum(u, v).abs());
-            }
-        }
+        let mut values: Vec<f64> = (0..w * h)
+            .map(|i| {
+                let (c, r) = (&cols[i % w], &rows[i / w]);
+                (0..6).map(|k| c[k] * r[k]).sum::<f64>()
+            })
+            .collect();
+        let max = values.iter().fold(0.0f64, |m, s| m.max(s.abs()));
         let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
-        let values = (0..w * h).map(|i| sum(i % w, i / w) * scale).collect();
+        for s in &mut values {
+            *s *= scale;
+        }
         SmoothField { w, values }
     }
 

@@ -40,11 +40,14 @@ pub const CACHE_LIMIT_ENV: &str = "NOISEFREE_SYNTH_CACHE_GB";
 /// of frames, every twin of Table III about 100 GB, more than many disks have free.
 pub const DEFAULT_LIMIT_GB: f64 = 20.0;
 
+/// [`DEFAULT_LIMIT_GB`] in bytes.
+const DEFAULT_LIMIT: u64 = (DEFAULT_LIMIT_GB * 1e9) as u64;
+
 /// The cap [`CACHE_LIMIT_ENV`] sets, bytes (the default when it is unset or empty); an error
 /// naming the variable when it is not a number of gigabytes at least 0.
 pub fn cache_limit_from_env() -> Result<u64, String> {
     let Some(v) = std::env::var_os(CACHE_LIMIT_ENV).filter(|v| !v.is_empty()) else {
-        return Ok((DEFAULT_LIMIT_GB * 1e9) as u64);
+        return Ok(DEFAULT_LIMIT);
     };
     let text = v.to_string_lossy();
     match text.trim().parse::<f64>() {
@@ -55,11 +58,14 @@ pub fn cache_limit_from_env() -> Result<u64, String> {
     }
 }
 
-/// The folder named by [`CACHE_ENV`], when it is set and not empty.
-pub fn cache_dir_from_env() -> Option<PathBuf> {
-    std::env::var_os(CACHE_ENV)
+/// The folder named by [`CACHE_ENV`], when it is set and not empty; an error when
+/// [`CACHE_LIMIT_ENV`] is set to something that is not a cap (see [`cache_limit_from_env`]),
+/// so a tool refuses it before anything runs rather than storing under the default.
+pub fn cache_dir_from_env() -> Result<Option<PathBuf>, String> {
+    cache_limit_from_env()?;
+    Ok(std::env::var_os(CACHE_ENV)
         .filter(|v| !v.is_empty())
-        .map(PathBuf::from)
+        .map(PathBuf::from))
 }
 
 /// First bytes of a cached frame file.
@@ -78,11 +84,11 @@ pub struct CachedFrames {
 
 impl CachedFrames {
     /// The frames of `gen`, cached in `dir` (`None`: always rendered), the folder kept under
-    /// the cap of [`CACHE_LIMIT_ENV`] (an unreadable value counts as the default; the
-    /// command-line tool refuses it first). The frames of other builds of the renderer are
-    /// removed from `dir` when this build first uses it.
+    /// the cap of [`CACHE_LIMIT_ENV`] (an unreadable value counts as the default;
+    /// [`cache_dir_from_env`] refuses it first). The frames of other builds of the renderer
+    /// are removed from `dir` when this build first uses it.
     pub fn new(gen: Generator, dir: Option<&Path>) -> Self {
-        let limit = cache_limit_from_env().unwrap_or((DEFAULT_LIMIT_GB * 1e9) as u64);
+        let limit = cache_limit_from_env().unwrap_or(DEFAULT_LIMIT);
         Self::with_limit(gen, dir, limit)
     }
 
@@ -614,14 +620,9 @@ mod tests {
                 .count()
         };
         // Room for two frames: the third is rendered, the same bits, and not stored.
-        let one = encode(
-            generator_key(&gen),
-            0,
-            &CachedFrames::new(gen.clone(), None).input(0).0,
-            &CachedFrames::new(gen.clone(), None).input(0).1,
-            gen.config().depth_units_per_metre,
-        )
-        .len() as u64;
+        let (input, pose) = CachedFrames::new(gen.clone(), None).input(0);
+        let units = gen.config().depth_units_per_metre;
+        let one = encode(generator_key(&gen), 0, &input, &pose, units).len() as u64;
         let cached = CachedFrames::with_limit(gen.clone(), Some(dir.path()), 2 * one + one / 2);
         for i in 0..3 {
             same(
@@ -646,7 +647,9 @@ mod tests {
 
     #[test]
     fn the_cache_cap_is_read_in_gigabytes_and_refused_when_not_a_number() {
-        // One test touches the variable, so no other reads it meanwhile.
+        // The only test that sets the variable; a test reading it meanwhile through
+        // CachedFrames::new gets one of these caps or the default, and renders the same bits.
+        // cache_dir_from_env refuses what cache_limit_from_env refuses.
         std::env::set_var(CACHE_LIMIT_ENV, "1.5");
         assert_eq!(cache_limit_from_env(), Ok(1_500_000_000));
         std::env::set_var(CACHE_LIMIT_ENV, "");
@@ -655,6 +658,7 @@ mod tests {
             std::env::set_var(CACHE_LIMIT_ENV, bad);
             let e = cache_limit_from_env().unwrap_err();
             assert!(e.contains(CACHE_LIMIT_ENV) && e.contains(bad), "{e}");
+            assert_eq!(cache_dir_from_env(), Err(e));
         }
         std::env::remove_var(CACHE_LIMIT_ENV);
         assert_eq!(cache_limit_from_env(), Ok(20_000_000_000));
