@@ -3,12 +3,13 @@
 //! frames, so that `slam-core`, the bottom of the workspace, depends on nothing of it (not
 //! even for its own tests) and `synth` can use `slam-core` without a circle.
 //!
-//! - `tests/end_to_end.rs`: the ORB-SLAM2 baseline on the presets (accuracy, relocalization
-//!   after an occlusion, bit-identical reruns, mapping lag); `tests/loop_closing.rs`: a
-//!   revisit verified and a larger replica of the place refused, a loop closed under mapping
-//!   lag; `tests/place_recognition.rs`: a kidnapped camera relocalized at once, BoW-guided
-//!   against brute-force matching; `tests/common/mod.rs`: rendering a sequence, running the
-//!   system, scoring it.
+//! - `tests/integration/` (one test binary, a module per topic): `end_to_end` runs the
+//!   ORB-SLAM2 baseline on the presets (accuracy, relocalization after an occlusion,
+//!   bit-identical reruns, mapping lag); `loop_closing` verifies a revisit and refuses a larger
+//!   replica of the place, and closes a loop under mapping lag; `place_recognition` relocalizes
+//!   a kidnapped camera at once and checks BoW-guided against brute-force matching;
+//!   `mcor_cache` checks MC-OR's cluster cache against the map; `common` renders a sequence
+//!   (through the shared frame cache), runs the system and scores it.
 //! - `benches/system.rs`: whole-pipeline frames per second (`cargo bench -p slam-e2e --bench
 //!   system`); `benches/relocalization.rs`: relocalization against 1000 keyframes;
 //!   `benches/loop_closing.rs`: loop closing, essential graph and global BA on a real map.

@@ -1,7 +1,7 @@
 //! TUM RGB-D reader on small folders written by the test: the happy path, and every kind of
 //! bad input the issue lists (each must be a clear error naming the file, never a panic).
 
-mod common;
+use crate::common;
 
 use common::{small_camera, write_tum};
 use datasets::{load_path, load_tum, load_tum_with, Catalog, DatasetError, Format, TumOptions};

@@ -3,7 +3,7 @@
 //! sequences: a `.tgz` of a synthetic TUM sequence from `synth` and a `.zip` of an EuRoC `mav0/`, and can break the first
 //! transfer half-way (the client must resume with `Range`) or ignore ranges (it must restart).
 
-mod common;
+use crate::common;
 
 use datasets::fetch::{fetch, FetchEvent, FetchOptions};
 use datasets::{load_euroc, load_tum, CameraId, DatasetError, Entry, EntryFormat};

@@ -5,7 +5,7 @@
 //! after the cut, and put the camera where it really is. And BoW-guided matching finds most of
 //! what brute-force matching finds between a keyframe and a later frame.
 
-mod common;
+use crate::common;
 
 use nalgebra::{Point3, Vector3};
 use slam_core::data::Features;

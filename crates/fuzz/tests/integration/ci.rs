@@ -207,7 +207,7 @@ fn settings_and_sensor_files_claiming_huge_images_or_matrices_are_refused_unallo
     refused_small("orb-slam3 width", 1 << 20, "must be <= 8192", || {
         datasets::settings::read_settings(&p, slam_core::SensorKind::Stereo).map(|_| ())
     });
-    let sensor = include_str!("../seeds/euroc-cam0-sensor.yaml");
+    let sensor = include_str!("../../seeds/euroc-cam0-sensor.yaml");
     let p = dir.write(
         "sensor.yaml",
         sensor

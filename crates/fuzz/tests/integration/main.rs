@@ -1,0 +1,5 @@
+//! The fuzz crate's integration tests in one binary: one link, and one optimised copy of the
+//! generic code they share, instead of one per file. A module per topic.
+
+mod ci;
+mod image_seeds;

@@ -1,0 +1,5 @@
+//! The perturb crate's integration tests in one binary: one link, and one optimised copy of the
+//! generic code they share, instead of one per file. A module per topic.
+
+mod definitions;
+mod systematic;
