@@ -26,7 +26,7 @@ pub struct SuiteSequence {
 
 impl SuiteSequence {
     /// The preset, with the trajectory when it overrides the preset's and the speed-up when
-    /// there is one: `stereo-spin`, `distorted-spin-x2`.
+    /// there is one: `stereo-spin`, `distorted-spin-x3`.
     pub fn label(&self) -> String {
         let mut l = match self.trajectory {
             Some(t) => format!("{}-{t}", self.preset),
@@ -98,10 +98,10 @@ pub const SUITE: [SuiteSequence; 6] = [
     SuiteSequence {
         preset: "distorted",
         trajectory: Some("spin"),
-        motion_scale: 2.0,
-        frames: 450,
+        motion_scale: 3.0,
+        frames: 300,
         synth_seed: 0,
-        exercises: "a full turn on the spot in 10 s with systematic depth error (drift), then \
+        exercises: "a full turn on the spot in 6.7 s with systematic depth error (drift), then \
                     the start seen again: loop detection, correction, essential graph, global BA",
         extra: &[],
     },
