@@ -71,7 +71,7 @@ pub const SUITE: [SuiteSequence; 6] = [
         preset: "stereo",
         trajectory: Some("spin"),
         motion_scale: 1.0,
-        frames: 200,
+        frames: 150,
         synth_seed: 0,
         exercises: "rectified stereo (EuRoC-like pair) turning on the spot: stereo matching, \
                     keyframes and local BA from stereo points",
@@ -109,7 +109,7 @@ pub const SUITE: [SuiteSequence; 6] = [
         preset: "twin_fr3_w_static",
         trajectory: None,
         motion_scale: 1.0,
-        frames: 90,
+        frames: 60,
         synth_seed: 0,
         exercises: "a twin: articulated people walking in an office before a still fr3 camera, \
                     the Kinect colour imaging (blur, rolling shutter, auto-exposure, noise) and \
