@@ -55,6 +55,10 @@ pub struct LoadOptions {
     /// A folder's camera from an ORB-SLAM2 / ORB-SLAM3 settings file instead of its name or
     /// `sensor.yaml` files (`run --camera`).
     pub camera: Option<PathBuf>,
+    /// The frame cache a synthetic sequence reads and fills ([`synth::CachedFrames`]); `None`:
+    /// the folder `NOISEFREE_SYNTH_CACHE` names, if any. Tests name theirs, so that they share
+    /// renders without touching the process's environment.
+    pub frame_cache: Option<PathBuf>,
 }
 
 /// Loads (or generates) the sequence of `source`, every frame decoded (the runner's tests).
@@ -102,7 +106,10 @@ pub fn open(
                 if n == 0 {
                     bail!("--frames must be at least 1");
                 }
-                let cache = synth::cache_dir_from_env().map_err(anyhow::Error::msg)?;
+                let cache = match &opts.frame_cache {
+                    Some(dir) => Some(dir.clone()),
+                    None => synth::cache_dir_from_env().map_err(anyhow::Error::msg)?,
+                };
                 let (mut s, frames) = datasets::open_synth_cached(&generator, n, cache.as_deref());
                 s.name = entry.name.clone();
                 (s, frames)

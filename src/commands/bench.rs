@@ -93,6 +93,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         synth_seed: args.synth_seed,
         synth_without: Vec::new(),
         camera: None,
+        frame_cache: None,
     };
     let (seq, reader) = open(&source, &catalog, &opts)?;
     let base = system_config(

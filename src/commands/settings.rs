@@ -45,6 +45,7 @@ pub fn run(args: SettingsArgs) -> Result<()> {
         synth_seed: args.synth_seed,
         synth_without: Vec::new(),
         camera: None,
+        frame_cache: None,
     };
     let (seq, _) = open(&source, &datasets::Catalog::embedded(), &opts)?;
     let settings = CameraSettings::of_sequence(&seq);

@@ -39,6 +39,7 @@ impl SequenceArgs {
             synth_seed: self.synth_seed,
             synth_without: self.synth_without.clone(),
             camera,
+            frame_cache: None,
         }
     }
 }

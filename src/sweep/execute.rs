@@ -238,6 +238,7 @@ pub fn load_options(req: &SweepRequest) -> LoadOptions {
         synth_seed: req.synth_seed,
         synth_without: req.synth_without.clone(),
         camera: None,
+        frame_cache: None,
     }
 }
 
