@@ -28,7 +28,10 @@ fn on_file(
     name: &'static str,
     read: impl Fn(&Path, &Path) -> anyhow::Result<()> + Send + Sync + 'static,
 ) -> Reader {
-    let dir = scratch_dir("cli");
+    // A folder per target: the targets run side by side, and a reader that looks at its
+    // folder (a sweep's) must see only its own file.
+    let dir = scratch_dir("cli").join(name.replace('.', "-"));
+    let _ = std::fs::create_dir_all(&dir);
     let path = dir.join(name);
     engine::driver::on_file(path, move |p| read(&dir, p).map_err(|e| format!("{e:#}")))
 }

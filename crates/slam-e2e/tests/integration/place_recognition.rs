@@ -1,6 +1,6 @@
 //! Place recognition in the running system. A camera turning on the spot is "kidnapped" back to
-//! a view it saw seconds before (the sequence cuts from frame 300, three quarters of a turn,
-//! back to frame 30): tracking is lost at the cut, and relocalization must find the keyframes of
+//! a view it saw seconds before (the sequence cuts from frame 200, half a turn, back to
+//! frame 30): tracking is lost at the cut, and relocalization must find the keyframes of
 //! that earlier view through the keyframe database and BoW-guided matching, on the first frame
 //! after the cut, and put the camera where it really is. And BoW-guided matching finds most of
 //! what brute-force matching finds between a keyframe and a later frame.
@@ -26,10 +26,10 @@ fn kidnapped_camera_relocalizes_at_once_to_the_right_place() {
     let mut cfg = Preset::Kinect.config();
     cfg.trajectory = Trajectory::Spin;
     cfg.motion_scale = 1.5;
-    const CUT: usize = 300;
+    const CUT: usize = 200;
     let gen = Generator::new(cfg.clone(), 5);
     let rendered = common::render(cfg, 5, CUT);
-    // Frames 0..300, then frames 30..70 again with later stamps.
+    // Frames 0..200 (11 keyframes when written), then frames 30..70 again with later stamps.
     let order: Vec<usize> = (0..CUT).chain(30..70).collect();
     let mut system = System::with_vocabulary(
         rendered.camera.clone(),
