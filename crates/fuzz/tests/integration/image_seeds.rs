@@ -1,6 +1,6 @@
 //! The PNG seeds of `seeds/` (written by `fuzz::png`: palettes, 1/2/4-bit grey, grey+alpha,
 //! 16-bit RGB(A), Adam7, files cut short): the committed files are the writer's output
-//! (`FUZZ_WRITE_SEEDS=1 cargo test -p fuzz --test image_seeds` writes them again), and every
+//! (`FUZZ_WRITE_SEEDS=1 cargo test -p fuzz --test integration image_seeds` writes them again), and every
 //! image reader accepts each with the pixels it holds or refuses it with an error naming the
 //! file.
 
@@ -24,7 +24,7 @@ fn the_committed_png_seeds_are_the_writers() {
         }
         assert!(
             std::fs::read(&p).ok().as_ref() == Some(&s.bytes),
-            "{} is not fuzz::png's; FUZZ_WRITE_SEEDS=1 cargo test -p fuzz --test image_seeds \
+            "{} is not fuzz::png's; FUZZ_WRITE_SEEDS=1 cargo test -p fuzz --test integration image_seeds \
              writes it",
             s.name
         );
