@@ -71,10 +71,11 @@ fn run_rc(preset: &str, frames: &str) -> f64 {
 #[test]
 fn rc_rescues_walking_and_costs_nothing_on_static_sequences() {
     // `walking` (RGB-D) is pinned by the regression suite (walking/orb against walking/rc).
+    // walking-stereo's first 70 frames: the baseline 159 mm off, rc 2.2 mm when written.
     let cases: Vec<(&str, &str)> = vec![
         ("kinect", "100"),
         ("stereo", "80"),
-        ("walking-stereo", "110"),
+        ("walking-stereo", "70"),
     ];
     let (results, run_rc_stereo) = std::thread::scope(|s| {
         let handles: Vec<_> = cases
