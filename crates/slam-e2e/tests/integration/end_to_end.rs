@@ -82,15 +82,7 @@ fn same_seed_gives_bit_identical_trajectory() {
     let frames = render(Preset::Kinect.config(), 0, 80);
     let a = track(&frames, Config::default());
     let b = track(&frames, Config::default());
-    assert_eq!(a.trajectory.len(), b.trajectory.len());
-    for ((ta, pa), (tb, pb)) in a.trajectory.iter().zip(&b.trajectory) {
-        assert_eq!(ta.to_bits(), tb.to_bits());
-        let (ma, mb) = (pa.to_homogeneous(), pb.to_homogeneous());
-        assert!(ma
-            .iter()
-            .zip(mb.iter())
-            .all(|(x, y)| x.to_bits() == y.to_bits()));
-    }
+    assert!(same_bytes(&a, &b));
 }
 
 /// Whether two runs produced the same trajectory bytes.
