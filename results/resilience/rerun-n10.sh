@@ -27,7 +27,7 @@ SYSTEMS=orb,mcor,avc,mcor+avc,rc
 "$NF" sweep --seq twin_fr2_coke,twin_fr1_desk,twin_fr3_office --frames 400 --configs "$SYSTEMS" \
   --runs 10 --mapping-lag 3 --perturb depth-axial:0,1,2,4,8,16,32,64,128 \
   --quiet --out results/resilience/twins-n10
-"$NF" table results/resilience/twins-n10
+"$NF" table --paper results/resilience/twins-n10
 # 4. The real ORB-SLAM3 (the pip wheel, systems/orbslam3-pip.toml) beside ours on `kinect`,
 #    n = 10 with paired draws (the n = 3 folder resilience/orbslam3 shared one draw).
 "$NF" sweep --seq kinect --frames 300 --configs "$SYSTEMS",orbslam3pip --config systems/orbslam3-pip.toml \
