@@ -5,9 +5,12 @@
 //! right image, the colour image of an RGB-D frame, stamp) and its exact pose, bit for bit.
 //!
 //! Files live in a subfolder named by the code ([`CODE_FINGERPRINT`]: the sources of this crate
-//! and slam-core, the manifests and Cargo.lock, fixed at build time); the first process of a
-//! new build removes the subfolders of other builds, so a cache holds one build's frames (about
-//! 1.8 MB a 640 x 480 RGB-D frame with its colour). Each file is named by a key of the code, the machine's
+//! and slam-core, the manifests and Cargo.lock, fixed at build time), about 1.8 MB a 640 x 480
+//! RGB-D frame with its colour. Every process that uses a build's subfolder marks it used; a
+//! process removes the subfolders of other builds unused for [`STALE_AFTER`], and of the others
+//! the least recently used first while the folder is over its cap. So two builds can share a
+//! folder (a long sweep of an installed binary beside the build being worked on) without each
+//! deleting the other's frames, while the frames of builds nobody runs any more do not pile up. Each file is named by a key of the code, the machine's
 //! architecture, the seed and the whole configuration, and by the frame index; it carries the
 //! key again and a checksum. A file that is missing, truncated, corrupt or of another key is
 //! ignored: the frame is rendered and the file written anew (to a temporary name, then renamed,
@@ -68,6 +71,15 @@ pub fn cache_dir_from_env() -> Result<Option<PathBuf>, String> {
         .map(PathBuf::from))
 }
 
+/// How long a build's subfolder stays after its last use: another build's process removes
+/// it after that. A process marks its folder while it reads or stores frames; one that works
+/// longer than this on frames it holds (a sweep's runs) may find them removed when it comes
+/// back, and then renders them again, the same bytes.
+pub const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(600);
+
+/// Reads between two marks of use on a build's subfolder by a process that only reads.
+const MARK_EVERY: usize = 64;
+
 /// First bytes of a cached frame file.
 const MAGIC: &[u8; 8] = b"NFSYNTH3";
 
@@ -86,20 +98,23 @@ impl CachedFrames {
     /// The frames of `gen`, cached in `dir` (`None`: always rendered), the folder kept under
     /// the cap of [`CACHE_LIMIT_ENV`] (an unreadable value counts as the default;
     /// [`cache_dir_from_env`] refuses it first). The frames of other builds of the renderer
-    /// are removed from `dir` when this build first uses it.
+    /// unused for [`STALE_AFTER`] are removed from `dir`.
     pub fn new(gen: Generator, dir: Option<&Path>) -> Self {
         let limit = cache_limit_from_env().unwrap_or(DEFAULT_LIMIT);
         Self::with_limit(gen, dir, limit)
     }
 
-    /// [`CachedFrames::new`] with a cap of `limit` bytes: frames are stored only while the
-    /// folder (as measured here, plus what this value stored since) stays under it; past it,
-    /// frames are rendered and not stored. Processes writing the same folder at once each
-    /// count from what they found, so together they may pass the cap by what each adds.
+    /// [`CachedFrames::new`] with a cap of `limit` bytes: other builds' frames are removed,
+    /// least recently used first, while the folder is over it; frames are stored only while
+    /// the folder (every build's frames in it, as measured here, plus what this value stored
+    /// since) stays under it; past it, frames are rendered and not stored. Processes writing
+    /// the same folder at once each count from what they found, so together they may pass the
+    /// cap by what each adds.
     pub fn with_limit(gen: Generator, dir: Option<&Path>, limit: u64) -> Self {
         let key = dir.map_or(0, |_| generator_key(&gen));
-        let dir = dir.map(|d| Arc::new(build_folder(d)));
-        let used = dir.as_deref().map_or(0, |d| folder_bytes(d));
+        let own = dir.map(build_folder);
+        let used = dir.map_or(0, |d| make_room(d, limit));
+        let dir = own.map(Arc::new);
         CachedFrames {
             gen,
             dir,
@@ -119,6 +134,9 @@ impl CachedFrames {
             .ok()
             .and_then(|b| decode(&b, self.key, index))
         {
+            if index.is_multiple_of(MARK_EVERY) {
+                mark_used(dir);
+            }
             return frame;
         }
         let (input, pose) = rendered(&self.gen, index);
@@ -151,25 +169,72 @@ fn folder_bytes(dir: &Path) -> u64 {
     })
 }
 
-/// This build's subfolder of the cache folder `dir`; made, and the other builds' subfolders
-/// removed, when it is not there yet (best effort: what cannot be removed stays).
+/// This build's subfolder of the cache folder `dir`, made when it is not there yet and marked
+/// used; the subfolders of other builds unused for [`STALE_AFTER`] removed (best effort: what
+/// cannot be removed or dated stays).
 fn build_folder(dir: &Path) -> PathBuf {
     let own = dir.join(CODE_FINGERPRINT);
-    if own.is_dir() {
-        return own;
-    }
-    if let Ok(entries) = std::fs::read_dir(dir) {
-        for e in entries.flatten() {
-            let name = e.file_name();
-            let name = name.to_string_lossy();
-            let a_build = name.len() == 16 && name.bytes().all(|b| b.is_ascii_hexdigit());
-            if a_build && e.path().is_dir() {
-                let _ = std::fs::remove_dir_all(e.path());
-            }
+    let _ = std::fs::create_dir_all(&own);
+    mark_used(&own);
+    let now = std::time::SystemTime::now();
+    for (path, used) in builds(dir) {
+        let stale = used
+            .and_then(|t| now.duration_since(t).ok())
+            .is_some_and(|age| age > STALE_AFTER);
+        if path != own && stale {
+            let _ = std::fs::remove_dir_all(path);
         }
     }
-    let _ = std::fs::create_dir_all(&own);
     own
+}
+
+/// The bytes of every build's frames in `dir`, after removing the subfolders of other builds,
+/// the least recently used first, while they take the room under `limit` this build needs.
+fn make_room(dir: &Path, limit: u64) -> u64 {
+    let own = dir.join(CODE_FINGERPRINT);
+    let mut found: Vec<(PathBuf, Option<std::time::SystemTime>, u64)> = builds(dir)
+        .into_iter()
+        .map(|(p, t)| {
+            let bytes = folder_bytes(&p);
+            (p, t, bytes)
+        })
+        .collect();
+    let mut used: u64 = found.iter().map(|b| b.2).sum();
+    found.retain(|b| b.0 != own);
+    found.sort_by_key(|b| b.1);
+    for (path, _, bytes) in found {
+        if used <= limit {
+            break;
+        }
+        if std::fs::remove_dir_all(&path).is_ok() {
+            used -= bytes;
+        }
+    }
+    used
+}
+
+/// The builds' subfolders of `dir` (16 hexadecimal digits) with their last use.
+fn builds(dir: &Path) -> Vec<(PathBuf, Option<std::time::SystemTime>)> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter(|e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            name.len() == 16 && name.bytes().all(|b| b.is_ascii_hexdigit())
+        })
+        .filter(|e| e.path().is_dir())
+        .map(|e| (e.path(), e.metadata().and_then(|m| m.modified()).ok()))
+        .collect()
+}
+
+/// Marks a build's subfolder used now (its modification time; best effort).
+fn mark_used(own: &Path) {
+    if let Ok(f) = std::fs::File::open(own) {
+        let _ = f.set_modified(std::time::SystemTime::now());
+    }
 }
 
 /// The frame rendered.
@@ -585,22 +650,31 @@ mod tests {
     }
 
     #[test]
-    fn a_new_build_removes_the_frames_of_the_builds_before_it() {
+    fn other_builds_frames_stay_while_used_and_go_once_stale() {
         let dir = tempfile::tempdir().unwrap();
-        let old_build = dir.path().join("0123456789abcdef");
-        std::fs::create_dir_all(&old_build).unwrap();
-        std::fs::write(old_build.join("0000000000000000-0.frame"), b"old").unwrap();
+        let other_build = |name: &str, age_s: u64| {
+            let d = dir.path().join(name);
+            std::fs::create_dir_all(&d).unwrap();
+            std::fs::write(d.join("0000000000000000-0.frame"), b"frame").unwrap();
+            let t = std::time::SystemTime::now() - std::time::Duration::from_secs(age_s);
+            std::fs::File::open(&d).unwrap().set_modified(t).unwrap();
+            d
+        };
+        let stale = other_build("0123456789abcdef", STALE_AFTER.as_secs() + 60);
+        let recent = other_build("fedcba9876543210", STALE_AFTER.as_secs() - 60);
         let not_ours = dir.path().join("notes");
         std::fs::create_dir_all(&not_ours).unwrap();
         let cached = CachedFrames::new(small("kinect"), Some(dir.path()));
-        assert!(!old_build.exists(), "another build's frames removed");
-        assert!(not_ours.is_dir(), "what is not a build's folder stays");
-        assert_eq!(
-            cached.dir.as_deref(),
-            Some(&dir.path().join(CODE_FINGERPRINT))
+        assert!(
+            !stale.exists(),
+            "a build unused for longer than STALE_AFTER removed"
         );
+        assert!(recent.is_dir(), "a build used within STALE_AFTER kept");
+        assert!(not_ours.is_dir(), "what is not a build's folder stays");
+        let own = dir.path().join(CODE_FINGERPRINT);
+        assert_eq!(cached.dir.as_deref(), Some(&own));
         cached.input(0);
-        // This build's frames stay for its next processes.
+        // This build's frames stay for its next processes, and its folder is marked used.
         let again = CachedFrames::new(small("kinect"), Some(dir.path()));
         assert_eq!(
             std::fs::read_dir(again.dir.as_deref().unwrap())
@@ -608,6 +682,53 @@ mod tests {
                 .count(),
             1
         );
+        let age = std::fs::metadata(&own)
+            .unwrap()
+            .modified()
+            .unwrap()
+            .elapsed();
+        assert!(matches!(age, Ok(a) if a < STALE_AFTER / 2), "{age:?}");
+        // The cap counts every build's frames in the folder: with room for this build's
+        // frames and one more, less the other build's 5 bytes, nothing more is stored.
+        let gen = small("kinect");
+        let (input, pose) = CachedFrames::new(gen.clone(), None).input(1);
+        let units = gen.config().depth_units_per_metre;
+        let one = encode(generator_key(&gen), 1, &input, &pose, units).len() as u64;
+        let limit = folder_bytes(&own) + one + 2;
+        let full = CachedFrames::with_limit(gen.clone(), Some(dir.path()), limit);
+        let before = std::fs::read_dir(&own).unwrap().count();
+        full.input(1);
+        assert_eq!(std::fs::read_dir(&own).unwrap().count(), before);
+    }
+
+    #[test]
+    fn over_the_cap_the_least_recently_used_other_build_goes_first() {
+        let dir = tempfile::tempdir().unwrap();
+        let own = dir.path().join(CODE_FINGERPRINT);
+        std::fs::create_dir_all(&own).unwrap();
+        std::fs::write(own.join("0000000000000000-0.frame"), [0u8; 100]).unwrap();
+        let other_build = |name: &str, age_s: u64| {
+            let d = dir.path().join(name);
+            std::fs::create_dir_all(&d).unwrap();
+            std::fs::write(d.join("0000000000000000-0.frame"), [0u8; 10]).unwrap();
+            let t = std::time::SystemTime::now() - std::time::Duration::from_secs(age_s);
+            std::fs::File::open(&d).unwrap().set_modified(t).unwrap();
+            d
+        };
+        let older = other_build("0123456789abcdef", 120);
+        let newer = other_build("fedcba9876543210", 60);
+        // 120 bytes in all; a cap of 115 needs one of the others gone, the older one.
+        let cached = CachedFrames::with_limit(small("kinect"), Some(dir.path()), 115);
+        assert!(!older.exists(), "the least recently used build removed");
+        assert!(newer.is_dir(), "the cap is met without removing the other");
+        assert!(
+            own.join("0000000000000000-0.frame").is_file(),
+            "this build's frames stay"
+        );
+        assert_eq!(cached.budget.load(Ordering::Relaxed), 5);
+        // Under the cap nothing goes.
+        CachedFrames::with_limit(small("kinect"), Some(dir.path()), 1000);
+        assert!(newer.is_dir());
     }
 
     #[test]
