@@ -34,3 +34,9 @@ SYSTEMS=orb,mcor,avc,mcor+avc,rc
   --runs 10 --mapping-lag 3 --perturb occluders:0,1,2,4 --perturb depth-axial:0,4,16,64 \
   --quiet --out results/resilience/orbslam3-n10
 "$NF" table results/resilience/orbslam3-n10
+# 5. The lateral axis of the same three twins (the n = 3 twins/ folder's other half). Its level-0
+#    runs are block 3's (the same keys), copied into the folder before it ran.
+"$NF" sweep --seq twin_fr2_coke,twin_fr1_desk,twin_fr3_office --frames 400 --configs "$SYSTEMS" \
+  --runs 10 --mapping-lag 3 --perturb depth-lateral:0,1,2,4,8,16,32 \
+  --quiet --out results/resilience/twins-lateral-n10
+"$NF" table --paper results/resilience/twins-lateral-n10

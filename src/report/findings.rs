@@ -655,6 +655,31 @@ fn fps_tests(dir: &Path, base: &Path) -> Result<String> {
     ))
 }
 
+/// The rows with every repeat of the same runs dropped: a folder may hold runs of another (a
+/// sweep's unperturbed runs copied into a second sweep of the same sequences), and the same
+/// runs are one piece of evidence, counted once, under the first folder that holds them. Rows
+/// are the same runs when their cell and every statistic over the runs are bit for bit equal.
+fn once_each(rows: Vec<VersusRow>) -> Vec<VersusRow> {
+    let bits = |v: Option<f64>| v.map(f64::to_bits);
+    let mut seen = std::collections::HashSet::new();
+    rows.into_iter()
+        .filter(|r| {
+            seen.insert((
+                r.sequence.clone(),
+                r.perturbation.clone(),
+                r.config.clone(),
+                r.taus
+                    .map(|(a, b, c)| [a.to_bits(), b.to_bits(), c.to_bits()]),
+                bits(r.b),
+                (r.runs, r.failed),
+                [bits(r.mean), bits(r.std)],
+                r.diff_pct
+                    .map(|(d, lo, hi)| [d.to_bits(), lo.to_bits(), hi.to_bits()]),
+            ))
+        })
+        .collect()
+}
+
 fn uses_mcor(c: &str) -> bool {
     c.starts_with("mcor")
 }
@@ -670,6 +695,7 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
     for d in dirs {
         rows.extend(read_versus(d)?);
     }
+    let rows = once_each(rows);
     let folders = dirs
         .iter()
         .filter(|d| d.join("versus-baseline.csv").is_file())
@@ -817,6 +843,56 @@ mod tests {
         let (lo, hi) = fisher_ci(0.5, 28.0);
         assert!((lo - 0.156_028_362_529_086).abs() < 1e-9, "{lo}");
         assert!((hi - 0.735_818_479_443_937_6).abs() < 1e-9, "{hi}");
+    }
+
+    #[test]
+    fn the_same_runs_in_two_folders_count_once() {
+        let row = |folder: &str, config: &str, mean: f64, diff: Option<f64>| VersusRow {
+            folder: folder.into(),
+            sequence: "twin_fr2_coke".into(),
+            perturbation: "none".into(),
+            axis: None,
+            config: config.into(),
+            taus: None,
+            b: None,
+            runs: 10,
+            failed: 0,
+            mean: Some(mean),
+            std: Some(0.0001),
+            diff_pct: diff.map(|d| (d, d - 1.0, d + 1.0)),
+            test: "paired_t".into(),
+            p_holm: Some(1.0),
+        };
+        let rows = vec![
+            row("a", "orb", 0.0035, None),
+            row("a", "avc", 0.0036, Some(2.9)),
+            // The same runs copied into folder b: dropped, folder a's kept.
+            row("b", "orb", 0.0035, None),
+            row("b", "avc", 0.0036, Some(2.9)),
+            // Other runs of the same cell (one bit apart): kept.
+            row("b", "mcor", 0.0036, Some(2.9)),
+            row(
+                "c",
+                "avc",
+                f64::from_bits(0.0036f64.to_bits() + 1),
+                Some(2.9),
+            ),
+        ];
+        let kept = once_each(rows);
+        let names: Vec<(String, String)> = kept
+            .iter()
+            .map(|r| (r.folder.display().to_string(), r.config.clone()))
+            .collect();
+        let pair = |f: &str, c: &str| (f.to_string(), c.to_string());
+        assert_eq!(
+            names,
+            [
+                pair("a", "orb"),
+                pair("a", "avc"),
+                pair("b", "mcor"),
+                pair("c", "avc")
+            ]
+        );
     }
 
     #[test]
