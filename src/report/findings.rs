@@ -869,7 +869,7 @@ mod tests {
             // The same runs copied into folder b: dropped, folder a's kept.
             row("b", "orb", 0.0035, None),
             row("b", "avc", 0.0036, Some(2.9)),
-            // Other runs of the same cell (one bit apart): kept.
+            // Another system (b, mcor) and other runs of a cell, one bit apart (c): kept.
             row("b", "mcor", 0.0036, Some(2.9)),
             row(
                 "c",

@@ -10,7 +10,8 @@
 //! process removes the subfolders of other builds unused for [`STALE_AFTER`], and of the others
 //! the least recently used first while the folder is over its cap. So two builds can share a
 //! folder (a long sweep of an installed binary beside the build being worked on) without each
-//! deleting the other's frames, while the frames of builds nobody runs any more do not pile up. Each file is named by a key of the code, the machine's
+//! deleting the other's frames, while the frames of builds nobody runs any more do not pile
+//! up. Each file is named by a key of the code, the machine's
 //! architecture, the seed and the whole configuration, and by the frame index; it carries the
 //! key again and a checksum. A file that is missing, truncated, corrupt or of another key is
 //! ignored: the frame is rendered and the file written anew (to a temporary name, then renamed,
@@ -112,9 +113,8 @@ impl CachedFrames {
     /// cap by what each adds.
     pub fn with_limit(gen: Generator, dir: Option<&Path>, limit: u64) -> Self {
         let key = dir.map_or(0, |_| generator_key(&gen));
-        let own = dir.map(build_folder);
-        let used = dir.map_or(0, |d| make_room(d, limit));
-        let dir = own.map(Arc::new);
+        let (dir, used) = dir.map(|d| settle_folder(d, limit)).unzip();
+        let (dir, used) = (dir.map(Arc::new), used.unwrap_or(0));
         CachedFrames {
             gen,
             dir,
@@ -169,40 +169,32 @@ fn folder_bytes(dir: &Path) -> u64 {
     })
 }
 
-/// This build's subfolder of the cache folder `dir`, made when it is not there yet and marked
-/// used; the subfolders of other builds unused for [`STALE_AFTER`] removed (best effort: what
-/// cannot be removed or dated stays).
-fn build_folder(dir: &Path) -> PathBuf {
+/// This build's subfolder of the cache folder `dir` (made when it is not there yet, and marked
+/// used) and the bytes of every build's frames in `dir` once other builds' subfolders are
+/// removed: those unused for [`STALE_AFTER`], then the least recently used first while the
+/// folder is over `limit` (best effort: what cannot be removed or dated stays, and counts).
+fn settle_folder(dir: &Path, limit: u64) -> (PathBuf, u64) {
     let own = dir.join(CODE_FINGERPRINT);
     let _ = std::fs::create_dir_all(&own);
     mark_used(&own);
     let now = std::time::SystemTime::now();
-    for (path, used) in builds(dir) {
-        let stale = used
+    let mut used = 0;
+    let mut others = Vec::new();
+    for (path, last_use) in builds(dir) {
+        let stale = last_use
             .and_then(|t| now.duration_since(t).ok())
             .is_some_and(|age| age > STALE_AFTER);
-        if path != own && stale {
-            let _ = std::fs::remove_dir_all(path);
+        if path != own && stale && std::fs::remove_dir_all(&path).is_ok() {
+            continue;
+        }
+        let bytes = folder_bytes(&path);
+        used += bytes;
+        if path != own {
+            others.push((last_use, path, bytes));
         }
     }
-    own
-}
-
-/// The bytes of every build's frames in `dir`, after removing the subfolders of other builds,
-/// the least recently used first, while they take the room under `limit` this build needs.
-fn make_room(dir: &Path, limit: u64) -> u64 {
-    let own = dir.join(CODE_FINGERPRINT);
-    let mut found: Vec<(PathBuf, Option<std::time::SystemTime>, u64)> = builds(dir)
-        .into_iter()
-        .map(|(p, t)| {
-            let bytes = folder_bytes(&p);
-            (p, t, bytes)
-        })
-        .collect();
-    let mut used: u64 = found.iter().map(|b| b.2).sum();
-    found.retain(|b| b.0 != own);
-    found.sort_by_key(|b| b.1);
-    for (path, _, bytes) in found {
+    others.sort_by_key(|o| o.0);
+    for (_, path, bytes) in others {
         if used <= limit {
             break;
         }
@@ -210,7 +202,7 @@ fn make_room(dir: &Path, limit: u64) -> u64 {
             used -= bytes;
         }
     }
-    used
+    (own, used)
 }
 
 /// The builds' subfolders of `dir` (16 hexadecimal digits) with their last use.
@@ -649,19 +641,23 @@ mod tests {
         assert_ne!(checksum(&swapped), sum);
     }
 
+    /// Another build's subfolder of `dir`, one frame file of `bytes` bytes, last used `age_s`
+    /// seconds ago.
+    fn other_build(dir: &Path, name: &str, age_s: u64, bytes: usize) -> PathBuf {
+        let d = dir.join(name);
+        std::fs::create_dir_all(&d).unwrap();
+        std::fs::write(d.join("0000000000000000-0.frame"), vec![0u8; bytes]).unwrap();
+        let t = std::time::SystemTime::now() - std::time::Duration::from_secs(age_s);
+        std::fs::File::open(&d).unwrap().set_modified(t).unwrap();
+        d
+    }
+
     #[test]
     fn other_builds_frames_stay_while_used_and_go_once_stale() {
         let dir = tempfile::tempdir().unwrap();
-        let other_build = |name: &str, age_s: u64| {
-            let d = dir.path().join(name);
-            std::fs::create_dir_all(&d).unwrap();
-            std::fs::write(d.join("0000000000000000-0.frame"), b"frame").unwrap();
-            let t = std::time::SystemTime::now() - std::time::Duration::from_secs(age_s);
-            std::fs::File::open(&d).unwrap().set_modified(t).unwrap();
-            d
-        };
-        let stale = other_build("0123456789abcdef", STALE_AFTER.as_secs() + 60);
-        let recent = other_build("fedcba9876543210", STALE_AFTER.as_secs() - 60);
+        let (d, stale_s) = (dir.path(), STALE_AFTER.as_secs());
+        let stale = other_build(d, "0123456789abcdef", stale_s + 60, 5);
+        let recent = other_build(d, "fedcba9876543210", stale_s - 60, 5);
         let not_ours = dir.path().join("notes");
         std::fs::create_dir_all(&not_ours).unwrap();
         let cached = CachedFrames::new(small("kinect"), Some(dir.path()));
@@ -707,16 +703,8 @@ mod tests {
         let own = dir.path().join(CODE_FINGERPRINT);
         std::fs::create_dir_all(&own).unwrap();
         std::fs::write(own.join("0000000000000000-0.frame"), [0u8; 100]).unwrap();
-        let other_build = |name: &str, age_s: u64| {
-            let d = dir.path().join(name);
-            std::fs::create_dir_all(&d).unwrap();
-            std::fs::write(d.join("0000000000000000-0.frame"), [0u8; 10]).unwrap();
-            let t = std::time::SystemTime::now() - std::time::Duration::from_secs(age_s);
-            std::fs::File::open(&d).unwrap().set_modified(t).unwrap();
-            d
-        };
-        let older = other_build("0123456789abcdef", 120);
-        let newer = other_build("fedcba9876543210", 60);
+        let older = other_build(dir.path(), "0123456789abcdef", 120, 10);
+        let newer = other_build(dir.path(), "fedcba9876543210", 60, 10);
         // 120 bytes in all; a cap of 115 needs one of the others gone, the older one.
         let cached = CachedFrames::with_limit(small("kinect"), Some(dir.path()), 115);
         assert!(!older.exists(), "the least recently used build removed");
