@@ -16,13 +16,17 @@ SYSTEMS=orb,mcor,avc,mcor+avc,rc
   --quiet --out results/resilience/euroc-real-n10
 "$NF" table results/resilience/euroc-real-n10
 # 2. fr2_coke's twin where depth noise does break it, and the cells left unrun before. The
-#    cheap axes first: a run at depth-axial 512 or 1000 makes a keyframe of nearly every frame
-#    (local BA over 230-340 keyframes, 2-5 min a run), so those cells come last.
+#    cheap axes in one folder (its level-0 runs are block 3's, the same keys, copied in before
+#    it ran). The axial cells in another: a run at depth-axial 512 or 1000 makes a keyframe of
+#    nearly every frame (local BA over 230-340 keyframes, 2-5 min a run); its level-0 and 128 x
+#    runs are block 3's too.
 "$NF" sweep --seq twin_fr2_coke --frames 400 --configs "$SYSTEMS" --runs 10 --mapping-lag 3 \
   --perturb depth-scale:0,5,10,20 --perturb depth-lag:0,2,4,8 --perturb occluders:0,1,2,4,8 \
-  --perturb depth-holes:0,50,80 --perturb depth-axial:0,128,512,1000 \
-  --quiet --out results/resilience/coke-breaking-n10
+  --perturb depth-holes:0,50,80 --quiet --out results/resilience/coke-breaking-n10
 "$NF" table results/resilience/coke-breaking-n10
+"$NF" sweep --seq twin_fr2_coke --frames 400 --configs "$SYSTEMS" --runs 10 --mapping-lag 3 \
+  --perturb depth-axial:0,128,512,1000 --quiet --out results/resilience/coke-axial-n10
+"$NF" table results/resilience/coke-axial-n10
 # 3. Three RGB-D twins under axial depth noise up to 128 x Nguyen's sigma.
 "$NF" sweep --seq twin_fr2_coke,twin_fr1_desk,twin_fr3_office --frames 400 --configs "$SYSTEMS" \
   --runs 10 --mapping-lag 3 --perturb depth-axial:0,1,2,4,8,16,32,64,128 \
