@@ -84,6 +84,20 @@ fn sweep_resume_shards_and_table() {
     let resumed = tmpdir("resumed");
     sweep(&resumed, &["--max-runs", "5"]);
     assert_eq!(rows(&resumed, "runs.csv").len(), 5);
+    // Its tables say the folder is incomplete, and the findings leave it out, naming it.
+    noisefree_ok(&["table", resumed.to_str().unwrap()]);
+    let index = std::fs::read_to_string(resumed.join("README.md")).unwrap();
+    assert!(
+        index.contains("**Incomplete:** 5 of 12 planned runs recorded (missing: "),
+        "{index}"
+    );
+    let o = noisefree_ok(&["report", resumed.to_str().unwrap()]);
+    let findings = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        findings.contains("Left out until their sweeps finish: ")
+            && findings.contains("5 of 12 planned runs recorded"),
+        "{findings}"
+    );
     sweep(&resumed, &[]);
     assert_eq!(rows(&resumed, "runs.csv"), full_rows);
     // A third invocation has nothing left to do.
@@ -100,6 +114,8 @@ fn sweep_resume_shards_and_table() {
     // Tables: identical Table III from all three folders, in Markdown with both configurations.
     for d in [&full, &resumed, &sharded] {
         noisefree_ok(&["table", d.to_str().unwrap()]);
+        let index = std::fs::read_to_string(d.join("README.md")).unwrap();
+        assert!(!index.contains("Incomplete"), "{index}");
     }
     let t_full = std::fs::read_to_string(full.join("table3.md")).unwrap();
     assert_eq!(

@@ -691,6 +691,16 @@ fn uses_avc(c: &str) -> bool {
 /// The findings of the tables in `dirs`, links relative to `base` (the folder of the file they
 /// go into).
 pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Findings> {
+    // A folder whose sweep has not recorded every run it was asked for is left out, and named.
+    let mut left_out = Vec::new();
+    let mut complete = Vec::new();
+    for d in dirs {
+        match crate::sweep::planned::completeness_of(d)? {
+            Some(c) if !c.is_complete() => left_out.push((d.clone(), c)),
+            _ => complete.push(d.clone()),
+        }
+    }
+    let dirs = &complete[..];
     let mut rows = Vec::new();
     for d in dirs {
         rows.extend(read_versus(d)?);
@@ -707,6 +717,16 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
          95 %, Student's t; paired where runs share seed and perturbation draw). Every number \
          below is read from the table it links.\n\n"
     );
+    if !left_out.is_empty() {
+        let named: Vec<String> = left_out
+            .iter()
+            .map(|(d, c)| format!("{} ({})", link(base, d, "README.md"), c.sentence()))
+            .collect();
+        md.push_str(&format!(
+            "Left out until their sweeps finish: {}.\n\n",
+            named.join("; ")
+        ));
+    }
     let [plain, chained] = table3_findings(&mut md, &rows, catalog, base);
     let lateral = axis_findings(
         &mut md,

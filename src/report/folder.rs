@@ -256,6 +256,16 @@ fn write_index(
             .join(", "),
         sequences.join(", ")
     );
+    if let Some(c) = crate::sweep::planned::completeness(dir, records)? {
+        if !c.is_complete() {
+            let _ = writeln!(
+                md,
+                "**Incomplete:** {}. The tables below cover the recorded runs only; the sweep's \
+                 command, run again, resumes it (`planned-runs.txt`: the runs asked for).\n",
+                c.sentence()
+            );
+        }
+    }
     let settings = crate::sweep::store::settings_of(dir)?;
     let _ = write!(md, "Vocabularies: ours {}", settings.vocabulary);
     for (n, v) in vocabularies {

@@ -296,6 +296,8 @@ pub struct Summary {
 pub fn sweep(req: &SweepRequest, catalog: &Catalog) -> Result<Summary> {
     let plan = plan(req, catalog)?;
     let folder = settle_folder(req, &plan)?;
+    // The whole plan, every shard's runs included: the folder is complete when all are recorded.
+    crate::sweep::planned::record_plan(&req.out, plan.jobs.iter().map(Job::key))?;
     let mine: Vec<&Job> = plan
         .jobs
         .iter()
