@@ -321,14 +321,20 @@ fn axis_findings(
             .filter_map(|r| Some((r, r.diff_pct?)))
             .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))
             .map(|(r, d)| {
-                format!(
+                let what = format!(
                     "{} ({}, {}, `{}`{})",
                     diff_text(d),
                     r.config,
                     r.sequence,
                     r.perturbation,
                     if r.survives() { ", survives" } else { "" }
-                )
+                );
+                // Every difference above zero: no gain to name, only the smallest loss.
+                if d.0 < 0.0 {
+                    what
+                } else {
+                    format!("none; the lowest, {what}")
+                }
             })
             .unwrap_or_default();
         totals = (totals.0 + list.len(), totals.1 + gains);
@@ -657,26 +663,52 @@ fn fps_tests(dir: &Path, base: &Path) -> Result<String> {
 
 /// The rows with every repeat of the same runs dropped: a folder may hold runs of another (a
 /// sweep's unperturbed runs copied into a second sweep of the same sequences), and the same
-/// runs are one piece of evidence, counted once, under the first folder that holds them. Rows
-/// are the same runs when their cell and every statistic over the runs are bit for bit equal.
+/// runs are one piece of evidence, counted once. Rows are the same runs when their cell and
+/// every statistic over the runs are bit for bit equal. Of the copies, the one whose table
+/// corrects it most (the largest Holm p, the first of equals) is kept: a comparison copied into
+/// a table of fewer comparisons must not survive there while it does not in its own.
 fn once_each(rows: Vec<VersusRow>) -> Vec<VersusRow> {
     let bits = |v: Option<f64>| v.map(f64::to_bits);
-    let mut seen = std::collections::HashSet::new();
+    type Key = (
+        String,
+        String,
+        String,
+        Option<[u64; 3]>,
+        Option<u64>,
+        (usize, usize),
+        [Option<u64>; 2],
+        Option<[u64; 3]>,
+    );
+    let key = |r: &VersusRow| -> Key {
+        (
+            r.sequence.clone(),
+            r.perturbation.clone(),
+            r.config.clone(),
+            r.taus
+                .map(|(a, b, c)| [a.to_bits(), b.to_bits(), c.to_bits()]),
+            bits(r.b),
+            (r.runs, r.failed),
+            [bits(r.mean), bits(r.std)],
+            r.diff_pct
+                .map(|(d, lo, hi)| [d.to_bits(), lo.to_bits(), hi.to_bits()]),
+        )
+    };
+    // For each set of runs, the index of the copy to keep.
+    let mut keep: std::collections::HashMap<Key, usize> = Default::default();
+    for (i, r) in rows.iter().enumerate() {
+        let k = key(r);
+        match keep.get(&k) {
+            Some(&j) if rows[j].p_holm.unwrap_or(0.0) >= r.p_holm.unwrap_or(0.0) => {}
+            _ => {
+                keep.insert(k, i);
+            }
+        }
+    }
+    let kept: std::collections::HashSet<usize> = keep.into_values().collect();
     rows.into_iter()
-        .filter(|r| {
-            seen.insert((
-                r.sequence.clone(),
-                r.perturbation.clone(),
-                r.config.clone(),
-                r.taus
-                    .map(|(a, b, c)| [a.to_bits(), b.to_bits(), c.to_bits()]),
-                bits(r.b),
-                (r.runs, r.failed),
-                [bits(r.mean), bits(r.std)],
-                r.diff_pct
-                    .map(|(d, lo, hi)| [d.to_bits(), lo.to_bits(), hi.to_bits()]),
-            ))
-        })
+        .enumerate()
+        .filter(|(i, _)| kept.contains(i))
+        .map(|(_, r)| r)
         .collect()
 }
 
@@ -897,6 +929,16 @@ mod tests {
                 f64::from_bits(0.0036f64.to_bits() + 1),
                 Some(2.9),
             ),
+            // The same runs in a table of fewer comparisons (d, surviving there) and of more
+            // (e, not surviving): e's copy is kept, wherever it comes.
+            VersusRow {
+                p_holm: Some(0.01),
+                ..row("d", "rc", 0.0040, Some(-5.0))
+            },
+            VersusRow {
+                p_holm: Some(0.3),
+                ..row("e", "rc", 0.0040, Some(-5.0))
+            },
         ];
         let kept = once_each(rows);
         let names: Vec<(String, String)> = kept
@@ -910,8 +952,50 @@ mod tests {
                 pair("a", "orb"),
                 pair("a", "avc"),
                 pair("b", "mcor"),
-                pair("c", "avc")
+                pair("c", "avc"),
+                pair("e", "rc")
             ]
+        );
+    }
+
+    #[test]
+    fn an_axis_table_without_a_gain_names_none() {
+        let row = |folder: &str, diff: f64| VersusRow {
+            folder: folder.into(),
+            sequence: "twin_fr2_coke".into(),
+            perturbation: "depth-axial:512".into(),
+            axis: Some("depth-axial".into()),
+            config: "avc".into(),
+            taus: None,
+            b: None,
+            runs: 10,
+            failed: 0,
+            mean: Some(0.1),
+            std: Some(0.01),
+            diff_pct: Some((diff, diff - 5.0, diff + 5.0)),
+            test: "paired_t".into(),
+            p_holm: Some(1.0),
+        };
+        let rows = [
+            row("gains", -4.0),
+            row("gains", 3.0),
+            row("losses", 3.0),
+            row("losses", 11.0),
+        ];
+        let mut md = String::new();
+        axis_findings(
+            &mut md,
+            &rows,
+            Path::new("."),
+            "t",
+            "c",
+            "depth-axial",
+            uses_avc,
+        );
+        assert!(md.contains("| -4.0 % [-9.0, +1.0] (avc,"), "{md}");
+        assert!(
+            md.contains("| none; the lowest, +3.0 % [-2.0, +8.0] (avc,"),
+            "{md}"
         );
     }
 
