@@ -98,9 +98,24 @@ impl Completeness {
 /// hold; `None` when the folder has no plan. Recorded runs outside the plan (copied in from
 /// another folder, say) count for nothing either way.
 pub fn completeness(dir: &Path, records: &[RunRecord]) -> Result<Option<Completeness>> {
+    Ok(planned(dir)?.map(|plan| against(&plan, records)))
+}
+
+/// [`completeness`] of folder `dir` from its record files; `None` when it has no plan or no
+/// record.
+pub fn completeness_of(dir: &Path) -> Result<Option<Completeness>> {
     let Some(plan) = planned(dir)? else {
         return Ok(None);
     };
+    if !crate::sweep::store::is_sweep_dir(dir) {
+        return Ok(None);
+    }
+    let records = crate::sweep::store::load_dir(dir)?;
+    Ok(Some(against(&plan, &records)))
+}
+
+/// How much of `plan` the `records` hold (a run key's sequence is its first field).
+fn against(plan: &BTreeSet<String>, records: &[RunRecord]) -> Completeness {
     let done: BTreeSet<String> = records.iter().map(RunRecord::key).collect();
     let mut missing: BTreeMap<String, usize> = BTreeMap::new();
     for k in plan.iter().filter(|k| !done.contains(*k)) {
@@ -108,21 +123,11 @@ pub fn completeness(dir: &Path, records: &[RunRecord]) -> Result<Option<Complete
         *missing.entry(seq.to_owned()).or_default() += 1;
     }
     let absent: usize = missing.values().sum();
-    Ok(Some(Completeness {
+    Completeness {
         planned: plan.len(),
         recorded: plan.len() - absent,
         missing,
-    }))
-}
-
-/// [`completeness`] of folder `dir` from its record files; `None` when it has no plan or no
-/// record.
-pub fn completeness_of(dir: &Path) -> Result<Option<Completeness>> {
-    if planned(dir)?.is_none() || !crate::sweep::store::is_sweep_dir(dir) {
-        return Ok(None);
     }
-    let records = crate::sweep::store::load_dir(dir)?;
-    completeness(dir, &records)
 }
 
 #[cfg(test)]
