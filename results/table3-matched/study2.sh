@@ -40,7 +40,8 @@ chain_at() {
 ROWS=${ROWS:-"twin_fr1_desk twin_fr2_desk twin_fr3_office twin_fr1_desk2 twin_fr1_teddy \
   twin_fr1_room twin_fr1_plant twin_fr1_rpy twin_fr1_floor twin_fr3_s_sphere twin_fr1_xyz \
   twin_fr3_nst twin_fr3_s_static twin_fr3_s_xyz twin_fr2_coke twin_v101 twin_mh01 twin_fr1_360 \
-  twin_fr2_xyz"}
+  twin_fr2_xyz twin_fr3_s_rpy twin_fr3_w_static twin_mh02 twin_mh03 twin_mh05 twin_v102 twin_v103 \
+  twin_v201 twin_v202 twin_mh04 twin_v203"}
 # A match whose target lies outside the chain's reach ends with an error but writes its
 # match.json. Such a twin gets no row here: one already harder than the paper's figure
 # unperturbed (below_range: the closest level is 0, no draw to vary, ten identical runs), or one
