@@ -10,6 +10,7 @@ mod bench;
 mod columns;
 mod commands;
 mod config_file;
+mod cpu_time;
 mod difficulty;
 mod external;
 mod file_name;

@@ -2,6 +2,7 @@
 //! trajectory and per-frame statistics, and score it against ground truth with ate-eval in the
 //! frame the ground truth is expressed in (EuRoC: body frame via T_BS).
 
+use crate::cpu_time::thread_cpu_s;
 use ate_eval::{evaluate_ate, AteOptions, AteResult, Trajectory};
 use datasets::{DatasetError, FrameReader, Sequence};
 use rayon::prelude::*;
@@ -43,6 +44,10 @@ pub struct RunOutcome {
     /// Wall time of the run, seconds (single thread), including its features' extraction
     /// (when they were extracted once for several runs: the time that extraction took).
     pub wall_s: f64,
+    /// CPU time of the run, seconds: its thread's (user + system), plus its features'
+    /// extraction when they were extracted once for several runs, as `wall_s` charges it.
+    /// Equal to `wall_s` on a core of its own; below it when the run shared its core.
+    pub cpu_s: f64,
     /// The failure verdict ('F').
     pub failed: bool,
 }
@@ -114,6 +119,8 @@ pub struct ExtractedFrame {
     /// What the extraction took on one core, milliseconds (reported as the frame's feature
     /// time by every run, so per-run figures stay comparable with in-run extraction).
     pub extraction_ms: f64,
+    /// The CPU time of that extraction, milliseconds (its thread's clock).
+    pub extraction_cpu_ms: f64,
 }
 
 /// A sequence's frames as features for one set of ORB settings: what a sweep's runs share, so
@@ -159,10 +166,15 @@ impl ExtractedSequence {
     pub fn extraction_s(&self) -> f64 {
         self.frames.iter().map(|f| f.extraction_ms).sum::<f64>() / 1e3
     }
+
+    /// Total extraction CPU time, seconds (each worker thread's clock).
+    pub fn extraction_cpu_s(&self) -> f64 {
+        self.frames.iter().map(|f| f.extraction_cpu_ms).sum::<f64>() / 1e3
+    }
 }
 
-/// A frame extracted without its depth, and what its extraction took (ms).
-pub type ImageFrame = (Arc<slam_core::frame::Frame>, f64);
+/// A frame extracted without its depth, and what its extraction took: wall and CPU, ms.
+pub type ImageFrame = (Arc<slam_core::frame::Frame>, f64, f64);
 
 /// A sequence's frames extracted once for one set of ORB settings, *without* their depth
 /// (RGB-D; stereo frames keep their own matches), so that each depth-only or time perturbation
@@ -173,7 +185,8 @@ pub type ImageFrame = (Arc<slam_core::frame::Frame>, f64);
 pub struct ImageFrames {
     /// The ORB settings.
     pub orb: OrbConfig,
-    /// Per input frame: the frame without depth, and what its extraction took (ms).
+    /// Per input frame: the frame without depth, and what its extraction took (wall and CPU,
+    /// ms).
     pub frames: Vec<ImageFrame>,
 }
 
@@ -196,9 +209,10 @@ impl ImageFrames {
             orbs,
             on_frame,
             |input, extractor| {
-                let t = Instant::now();
+                let (t, c) = (Instant::now(), thread_cpu_s());
                 let f = slam_core::frame::Frame::new(0, input, camera, extractor);
-                (Arc::new(f), t.elapsed().as_secs_f64() * 1e3)
+                let cpu_ms = (thread_cpu_s() - c) * 1e3;
+                (Arc::new(f), t.elapsed().as_secs_f64() * 1e3, cpu_ms)
             },
         )?;
         Ok(orbs
@@ -226,7 +240,7 @@ impl ImageFrames {
             .into_par_iter()
             .map(|i| {
                 let input = frames.read(i)?;
-                let (frame, ms) = &self.frames[source(i)];
+                let (frame, ms, cpu_ms) = &self.frames[source(i)];
                 let features =
                     slam_core::frame::features_with_depth(frame, input.depth.as_deref(), camera);
                 on_frame();
@@ -234,6 +248,7 @@ impl ImageFrames {
                     timestamp: input.timestamp,
                     features: Arc::new(features),
                     extraction_ms: *ms,
+                    extraction_cpu_ms: *cpu_ms,
                 })
             })
             .collect();
@@ -278,12 +293,13 @@ fn extract_each(
     on_frame: impl Fn() + Sync,
 ) -> Result<Vec<ExtractedSequence>, DatasetError> {
     let per_orb = extract_per_orb(n, read, orbs, on_frame, |input, extractor| {
-        let t = Instant::now();
+        let (t, c) = (Instant::now(), thread_cpu_s());
         let features = Arc::new(extract_features(input, camera, extractor));
         ExtractedFrame {
             timestamp: input.timestamp,
             features,
             extraction_ms: t.elapsed().as_secs_f64() * 1e3,
+            extraction_cpu_ms: (thread_cpu_s() - c) * 1e3,
         }
     })?;
     Ok(orbs
@@ -369,7 +385,7 @@ fn run(
     vocabulary: Option<&Arc<Vocabulary>>,
     mut on_frame: impl FnMut(usize),
 ) -> RunOutcome {
-    let start = Instant::now();
+    let (start, cpu_start) = (Instant::now(), thread_cpu_s());
     let mut system = match vocabulary {
         Some(v) => System::with_vocabulary(seq.camera.clone(), config.clone(), v.clone()),
         None => System::new(seq.camera.clone(), config.clone()),
@@ -390,6 +406,7 @@ fn run(
     // A run on shared features is charged what their extraction took, so its time and frames
     // per second stay those of a run that extracts for itself.
     let wall_s = start.elapsed().as_secs_f64() + extracted.map_or(0.0, |e| e.extraction_s());
+    let cpu_s = thread_cpu_s() - cpu_start + extracted.map_or(0.0, |e| e.extraction_cpu_s());
     let closing_frames = stats.iter().enumerate().filter(|(_, s)| s.loop_closed);
     let loops: Vec<ClosedLoop> = closing_frames
         .zip(system.loops())
@@ -443,6 +460,7 @@ fn run(
         loop_closing: config.loop_closing.enabled && vocabulary.is_some(),
         loops,
         wall_s,
+        cpu_s,
         failed,
     }
 }

@@ -99,6 +99,12 @@ fn noisefree_as_an_external_system_scores_bit_for_bit_as_the_internal_orb() {
             "{theirs:?}"
         );
         assert!(theirs["cpu_s"].parse::<f64>().unwrap() > 0.0);
+        // Ours: a single-threaded run's CPU time, never above its wall time.
+        let (cpu, wall) = (
+            ours["cpu_s"].parse::<f64>().unwrap(),
+            ours["wall_s"].parse::<f64>().unwrap(),
+        );
+        assert!(cpu > 0.0 && cpu <= wall * 1.02 + 0.01, "{ours:?}");
         assert!(theirs["fps"].parse::<f64>().unwrap() > 0.0);
         assert_eq!(
             theirs["keyframes"], "",

@@ -205,9 +205,10 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let done = crate::sweep::execute::sweep(&req, &catalog)?;
     if !args.quiet {
         eprintln!(
-            "{} runs finished in {:.1} s; records in {}",
+            "{} runs finished in {:.1} s, {}; records in {}",
             done.finished,
-            done.wall_s,
+            done.cost.wall_s,
+            done.cost.line(),
             done.records.display()
         );
     }

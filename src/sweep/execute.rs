@@ -15,7 +15,7 @@ use crate::sweep::external_run::{perturbed_folder, run_external_jobs, ExternalCo
 use crate::sweep::job::{job_config, run_job};
 use crate::sweep::plan::{expand, perturbation_points, with_perturbations, Job, RunConfig};
 use crate::sweep::plan::{Grids, Params, PerturbPoint, Shard};
-use crate::sweep::progress::Progress;
+use crate::sweep::progress::{Cost, Progress};
 use crate::sweep::store::{pin_settings, FolderSettings, RunStore};
 use crate::vocab_file::VocabularyChoice;
 use anyhow::{Context, Result};
@@ -286,8 +286,8 @@ pub struct Phase<'a> {
 pub struct Summary {
     /// Runs finished (and recorded) in this invocation.
     pub finished: usize,
-    /// Its wall time, seconds.
-    pub wall_s: f64,
+    /// What it cost: frames run, the process's CPU time and the wall time.
+    pub cost: Cost,
     /// The file the runs were recorded in.
     pub records: PathBuf,
 }
@@ -361,10 +361,10 @@ pub fn sweep(req: &SweepRequest, catalog: &Catalog) -> Result<Summary> {
             }
         }
     }
-    let (finished, wall_s) = progress.finish();
+    let (finished, cost) = progress.finish();
     Ok(Summary {
         finished,
-        wall_s,
+        cost,
         records: folder.store.path().to_path_buf(),
     })
 }
@@ -703,7 +703,7 @@ pub fn run_ours(
                     &cx.req.out,
                 )?;
                 cx.folder.store.append(&rec)?;
-                cx.progress.done();
+                cx.progress.done(rec.frames);
                 bar.inc(1);
                 Ok(())
             })

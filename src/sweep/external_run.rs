@@ -394,7 +394,7 @@ pub fn run_external_jobs(
                     bar.set_message(format!("({} seed {}: {r})", system.name, job.seed));
                 }
                 cx.store.append(&rec)?;
-                progress.done();
+                progress.done(rec.frames);
                 bar.inc(1);
                 Ok(())
             })

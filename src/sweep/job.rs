@@ -113,7 +113,7 @@ pub fn run_job(
         loops: Some(o.loops.len()),
         reason: None,
         peak_rss_mb: None,
-        cpu_s: None,
+        cpu_s: Some(o.cpu_s),
         perturbation,
         perturb_family,
         perturb_level,

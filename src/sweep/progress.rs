@@ -1,6 +1,8 @@
 //! A sweep's progress: the overall bar (runs done of the sweep, elapsed time and an estimate of
-//! the time left), the per-phase bars under it, and the run budget of `--max-runs`.
+//! the time left), the per-phase bars under it, the run budget of `--max-runs`, and what the
+//! invocation cost (frames run per CPU-second of the whole process).
 
+use crate::cpu_time::process_cpu_s;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -12,8 +14,12 @@ pub struct Progress {
     overall: ProgressBar,
     finished: AtomicUsize,
     started: AtomicUsize,
+    /// Frames fed to the runs finished in this invocation.
+    frames: AtomicUsize,
     max_runs: usize,
     since: Instant,
+    /// The process's CPU seconds when the invocation started.
+    cpu_since: f64,
     /// Runs of the sweep (this shard) and how many were recorded before this invocation.
     total: usize,
     done_before: usize,
@@ -47,8 +53,10 @@ impl Progress {
             overall,
             finished: AtomicUsize::new(0),
             started: AtomicUsize::new(0),
+            frames: AtomicUsize::new(0),
             max_runs: max_runs.unwrap_or(usize::MAX),
             since: Instant::now(),
+            cpu_since: process_cpu_s(),
             total,
             done_before: done,
             log_lines: !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr()),
@@ -75,10 +83,20 @@ impl Progress {
             String::new()
         };
         eprintln!(
-            "sweep: {what} done; {recorded}/{} runs recorded, {} elapsed{eta}",
+            "sweep: {what} done; {recorded}/{} runs recorded, {} elapsed{eta}; {}",
             self.total,
-            hms(elapsed)
+            hms(elapsed),
+            self.cost().line()
         );
+    }
+
+    /// What this invocation has cost so far.
+    pub fn cost(&self) -> Cost {
+        Cost {
+            frames: self.frames.load(Ordering::SeqCst),
+            cpu_s: process_cpu_s() - self.cpu_since,
+            wall_s: self.since.elapsed().as_secs_f64(),
+        }
     }
 
     /// A bar of `len` items under the overall one, labelled `prefix`, counting `what`.
@@ -106,9 +124,10 @@ impl Progress {
         self.started.load(Ordering::SeqCst) >= self.max_runs
     }
 
-    /// Counts one finished (recorded) run.
-    pub fn done(&self) {
+    /// Counts one finished (recorded) run that was fed `frames` frames.
+    pub fn done(&self, frames: usize) {
         self.finished.fetch_add(1, Ordering::SeqCst);
+        self.frames.fetch_add(frames, Ordering::SeqCst);
         self.overall.inc(1);
     }
 
@@ -117,12 +136,42 @@ impl Progress {
         self.multi.suspend(|| eprintln!("{line}"));
     }
 
-    /// Clears the bars; returns the runs finished and the seconds since the start.
-    pub fn finish(&self) -> (usize, f64) {
+    /// Clears the bars; returns the runs finished and what they cost.
+    pub fn finish(&self) -> (usize, Cost) {
         self.overall.finish_and_clear();
-        (
-            self.finished.load(Ordering::SeqCst),
-            self.since.elapsed().as_secs_f64(),
+        (self.finished.load(Ordering::SeqCst), self.cost())
+    }
+}
+
+/// What an invocation of a sweep cost: the frames its runs were fed, and the CPU time of the
+/// whole process (rendering, reading, extraction, the runs and external systems' waiting
+/// threads) and the wall time it took. External systems' own processes are not counted (their
+/// records carry their CPU time).
+#[derive(Clone, Copy, Debug)]
+pub struct Cost {
+    /// Frames fed to the runs finished.
+    pub frames: usize,
+    /// CPU seconds of this process.
+    pub cpu_s: f64,
+    /// Wall seconds.
+    pub wall_s: f64,
+}
+
+impl Cost {
+    /// Frames run per CPU-second: the sweep's throughput per core, whatever else shares the
+    /// machine.
+    pub fn frames_per_cpu_s(&self) -> f64 {
+        self.frames as f64 / self.cpu_s.max(1e-9)
+    }
+
+    /// `12345 frames run in 678 CPU-s (18.2 frames/s per core, 1.9 cores busy)`.
+    pub fn line(&self) -> String {
+        format!(
+            "{} frames run in {:.0} CPU-s ({:.1} frames/s per core, {:.1} cores busy)",
+            self.frames,
+            self.cpu_s,
+            self.frames_per_cpu_s(),
+            self.cpu_s / self.wall_s.max(1e-9)
         )
     }
 }

@@ -66,8 +66,10 @@ pub struct RunRecord {
     /// Peak resident memory of an external system's process, MB (from `wait4`).
     #[serde(default)]
     pub peak_rss_mb: Option<f64>,
-    /// CPU time (user + system) of an external system's process, seconds: above `wall_s` for
-    /// a threaded system.
+    /// CPU time (user + system), seconds: of an external system's whole process (above
+    /// `wall_s` for a threaded system); of one of ours, its thread plus its share of the
+    /// features' extraction (below `wall_s` when the run shared its core). Empty in records of
+    /// ours written before the column was filled.
     #[serde(default)]
     pub cpu_s: Option<f64>,
     /// The perturbation applied to the sequence (`sweep --perturb`: a chain such as
