@@ -67,9 +67,10 @@ pub struct RunRecord {
     #[serde(default)]
     pub peak_rss_mb: Option<f64>,
     /// CPU time (user + system), seconds: of an external system's whole process (above
-    /// `wall_s` for a threaded system); of one of ours, its thread plus its share of the
-    /// features' extraction (below `wall_s` when the run shared its core). Empty in records of
-    /// ours written before the column was filled.
+    /// `wall_s` for a threaded system); of one of ours, its thread plus the CPU time of its
+    /// features' extraction, charged in full to every run that shares them as `wall_s` is (the
+    /// figures of a run that extracts for itself; below `wall_s` when the run shared its core).
+    /// Empty in records of ours written before the column was filled.
     #[serde(default)]
     pub cpu_s: Option<f64>,
     /// The perturbation applied to the sequence (`sweep --perturb`: a chain such as
