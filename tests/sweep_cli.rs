@@ -117,6 +117,51 @@ fn sweep_resume_shards_and_table() {
         let index = std::fs::read_to_string(d.join("README.md")).unwrap();
         assert!(!index.contains("Incomplete"), "{index}");
     }
+    // What the sweeps cost: every run once in the folders' cost records (the resumed folder's
+    // over the two invocations that ran something, the sharded one's over its three shards),
+    // and the index sums them.
+    for (d, invocations) in [(&full, 1), (&resumed, 2), (&sharded, 3)] {
+        let mut runs = 0;
+        let mut frames = 0;
+        let mut cpu = 0.0;
+        let mut stamps = std::collections::BTreeSet::new();
+        for e in std::fs::read_dir(d).unwrap() {
+            let n = e.unwrap().file_name().to_string_lossy().into_owned();
+            if !(n.starts_with("cost") && n.ends_with(".csv")) {
+                continue;
+            }
+            let text = std::fs::read_to_string(d.join(&n)).unwrap();
+            let mut lines = text.lines();
+            assert_eq!(
+                lines.next(),
+                Some("invocation,point,runs,frames,cpu_s,wall_s")
+            );
+            for l in lines {
+                let f: Vec<&str> = l.split(',').collect();
+                stamps.insert((n.clone(), f[0].to_string()));
+                assert!(["clean", "kinect"].contains(&f[1]), "{l}");
+                runs += f[2].parse::<usize>().unwrap();
+                frames += f[3].parse::<usize>().unwrap();
+                let c: f64 = f[4].parse().unwrap();
+                assert!(c > 0.0 && f[5].parse::<f64>().unwrap() > 0.0, "{l}");
+                cpu += c;
+            }
+        }
+        assert_eq!((runs, frames), (12, 12 * 25), "{}", d.display());
+        assert_eq!(stamps.len(), invocations, "{stamps:?}");
+        let index = std::fs::read_to_string(d.join("README.md")).unwrap();
+        assert!(
+            index.contains("Cost (`cost.csv`): every recorded run, 300 frames run in "),
+            "{index}"
+        );
+        let per_core: f64 = index
+            .split(" frames/s per core")
+            .next()
+            .and_then(|h| h.rsplit(' ').next())
+            .and_then(|x| x.parse().ok())
+            .unwrap_or_else(|| panic!("no frames/s per core in {index}"));
+        assert!((per_core - 300.0 / cpu).abs() <= 0.051, "{per_core} {cpu}");
+    }
     let t_full = std::fs::read_to_string(full.join("table3.md")).unwrap();
     assert_eq!(
         t_full,

@@ -266,6 +266,11 @@ fn write_index(
             );
         }
     }
+    let cost = crate::sweep::cost::load_dir(dir)?;
+    if !cost.is_empty() {
+        let total = crate::sweep::cost::CostTotal::of(&cost);
+        let _ = writeln!(md, "{}\n", total.sentence(records.len()));
+    }
     let settings = crate::sweep::store::settings_of(dir)?;
     let _ = write!(md, "Vocabularies: ours {}", settings.vocabulary);
     for (n, v) in vocabularies {

@@ -546,8 +546,7 @@ pub fn run_point(
         )?;
     }
     if ours.is_empty() {
-        cx.progress.log_step(&what);
-        return Ok(());
+        return point_done(cx, &what);
     }
     let mut orbs: Vec<OrbConfig> = Vec::new();
     for job in &ours {
@@ -564,8 +563,30 @@ pub fn run_point(
     };
     let extracted = extract(cx, rz, point, &orbs, &what, ours.len())?;
     run_ours(cx, rz, &pseq, &extracted, &what, &ours)?;
-    cx.progress.log_step(&what);
-    Ok(())
+    point_done(cx, &what)
+}
+
+/// The end of a point: its line in the log, and its cost in the folder's cost record (the
+/// process's CPU and wall time since the previous point ended, so the rendering and reading
+/// before a sequence's first point count with it).
+fn point_done(cx: &Phase<'_>, what: &str) -> Result<()> {
+    cx.progress.log_step(what);
+    let c = cx.progress.point_cost();
+    if c.runs == 0 {
+        return Ok(());
+    }
+    crate::sweep::cost::append(
+        &cx.req.out,
+        cx.req.shard,
+        &crate::sweep::cost::CostRow {
+            invocation: cx.progress.started_unix,
+            point: what.to_string(),
+            runs: c.runs,
+            frames: c.frames,
+            cpu_s: c.cpu_s,
+            wall_s: c.wall_s,
+        },
+    )
 }
 
 /// A perturbation point's sequence: its chain and draw, the perturbed sequence and its frames.

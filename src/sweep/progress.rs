@@ -5,6 +5,7 @@
 use crate::cpu_time::process_cpu_s;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// The bars and counters every phase of a sweep reports to.
@@ -20,6 +21,10 @@ pub struct Progress {
     since: Instant,
     /// The process's CPU seconds when the invocation started.
     cpu_since: f64,
+    /// When the invocation started, Unix seconds (its cost lines' `invocation`).
+    pub started_unix: u64,
+    /// The cost when the previous point ended ([`Progress::point_cost`]).
+    last_point: Mutex<Cost>,
     /// Runs of the sweep (this shard) and how many were recorded before this invocation.
     total: usize,
     done_before: usize,
@@ -57,6 +62,10 @@ impl Progress {
             max_runs: max_runs.unwrap_or(usize::MAX),
             since: Instant::now(),
             cpu_since: process_cpu_s(),
+            started_unix: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs()),
+            last_point: Mutex::new(Cost::default()),
             total,
             done_before: done,
             log_lines: !quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr()),
@@ -93,6 +102,7 @@ impl Progress {
     /// What this invocation has cost so far.
     pub fn cost(&self) -> Cost {
         Cost {
+            runs: self.finished.load(Ordering::SeqCst),
             frames: self.frames.load(Ordering::SeqCst),
             cpu_s: process_cpu_s() - self.cpu_since,
             wall_s: self.since.elapsed().as_secs_f64(),
@@ -124,6 +134,21 @@ impl Progress {
         self.started.load(Ordering::SeqCst) >= self.max_runs
     }
 
+    /// What the invocation has cost since the previous call (or its start): the cost of the
+    /// point that just ended, when called once at the end of each.
+    pub fn point_cost(&self) -> Cost {
+        let now = self.cost();
+        let mut last = self.last_point.lock().unwrap_or_else(|e| e.into_inner());
+        let d = Cost {
+            runs: now.runs - last.runs,
+            frames: now.frames - last.frames,
+            cpu_s: now.cpu_s - last.cpu_s,
+            wall_s: now.wall_s - last.wall_s,
+        };
+        *last = now;
+        d
+    }
+
     /// Counts one finished (recorded) run that was fed `frames` frames.
     pub fn done(&self, frames: usize) {
         self.finished.fetch_add(1, Ordering::SeqCst);
@@ -147,9 +172,11 @@ impl Progress {
 /// whole process (rendering, reading, extraction, the runs and external systems' waiting
 /// threads) and the wall time it took. External systems' own processes are not counted (their
 /// records carry their CPU time).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Cost {
-    /// Frames fed to the runs finished.
+    /// Runs finished.
+    pub runs: usize,
+    /// Frames fed to them.
     pub frames: usize,
     /// CPU seconds of this process.
     pub cpu_s: f64,
