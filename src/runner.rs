@@ -209,10 +209,9 @@ impl ImageFrames {
             orbs,
             on_frame,
             |input, extractor| {
-                let (t, c) = (Instant::now(), thread_cpu_s());
-                let f = slam_core::frame::Frame::new(0, input, camera, extractor);
-                let cpu_ms = (thread_cpu_s() - c) * 1e3;
-                (Arc::new(f), t.elapsed().as_secs_f64() * 1e3, cpu_ms)
+                let (f, ms, cpu_ms) =
+                    timed(|| slam_core::frame::Frame::new(0, input, camera, extractor));
+                (Arc::new(f), ms, cpu_ms)
             },
         )?;
         Ok(orbs
@@ -293,13 +292,12 @@ fn extract_each(
     on_frame: impl Fn() + Sync,
 ) -> Result<Vec<ExtractedSequence>, DatasetError> {
     let per_orb = extract_per_orb(n, read, orbs, on_frame, |input, extractor| {
-        let (t, c) = (Instant::now(), thread_cpu_s());
-        let features = Arc::new(extract_features(input, camera, extractor));
+        let (features, ms, cpu_ms) = timed(|| extract_features(input, camera, extractor));
         ExtractedFrame {
             timestamp: input.timestamp,
-            features,
-            extraction_ms: t.elapsed().as_secs_f64() * 1e3,
-            extraction_cpu_ms: (thread_cpu_s() - c) * 1e3,
+            features: Arc::new(features),
+            extraction_ms: ms,
+            extraction_cpu_ms: cpu_ms,
         }
     })?;
     Ok(orbs
@@ -310,6 +308,14 @@ fn extract_each(
             frames,
         })
         .collect())
+}
+
+/// `f`'s result and what it took on the calling thread: wall and CPU time, milliseconds.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, f64) {
+    let (t, c) = (Instant::now(), thread_cpu_s());
+    let out = f();
+    let cpu_ms = (thread_cpu_s() - c) * 1e3;
+    (out, t.elapsed().as_secs_f64() * 1e3, cpu_ms)
 }
 
 /// The skeleton both extractions share: frame `i` of `n` read by `read` and handed to

@@ -206,7 +206,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     if !args.quiet {
         eprintln!(
             "{} runs finished in {:.1} s, {}; records in {}",
-            done.finished,
+            done.cost.runs,
             done.cost.wall_s,
             done.cost.line(),
             done.records.display()

@@ -6,6 +6,7 @@
 //! per CPU-second is the sweep's throughput per core even on a machine it shared.
 
 use crate::sweep::plan::Shard;
+use crate::sweep::progress::hms;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -148,16 +149,6 @@ impl CostTotal {
             self.invocations,
             if self.invocations == 1 { "" } else { "s" }
         )
-    }
-}
-
-/// Seconds as `1 h 02 min` / `2 min 03 s` / `3 s`.
-fn hms(s: f64) -> String {
-    let s = s.max(0.0).round() as u64;
-    match (s / 3600, s / 60 % 60, s % 60) {
-        (0, 0, sec) => format!("{sec} s"),
-        (0, m, sec) => format!("{m} min {sec:02} s"),
-        (h, m, _) => format!("{h} h {m:02} min"),
     }
 }
 

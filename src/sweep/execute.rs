@@ -284,9 +284,8 @@ pub struct Phase<'a> {
 
 /// What one invocation of a sweep did.
 pub struct Summary {
-    /// Runs finished (and recorded) in this invocation.
-    pub finished: usize,
-    /// What it cost: frames run, the process's CPU time and the wall time.
+    /// What it cost: the runs finished (and recorded) in this invocation, the frames they were
+    /// fed, the process's CPU time and the wall time.
     pub cost: Cost,
     /// The file the runs were recorded in.
     pub records: PathBuf,
@@ -361,10 +360,8 @@ pub fn sweep(req: &SweepRequest, catalog: &Catalog) -> Result<Summary> {
             }
         }
     }
-    let (finished, cost) = progress.finish();
     Ok(Summary {
-        finished,
-        cost,
+        cost: progress.finish(),
         records: folder.store.path().to_path_buf(),
     })
 }

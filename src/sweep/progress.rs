@@ -161,10 +161,10 @@ impl Progress {
         self.multi.suspend(|| eprintln!("{line}"));
     }
 
-    /// Clears the bars; returns the runs finished and what they cost.
-    pub fn finish(&self) -> (usize, Cost) {
+    /// Clears the bars; returns what the invocation cost (its runs finished among it).
+    pub fn finish(&self) -> Cost {
         self.overall.finish_and_clear();
-        (self.finished.load(Ordering::SeqCst), self.cost())
+        self.cost()
     }
 }
 
@@ -204,7 +204,7 @@ impl Cost {
 }
 
 /// Seconds as `1h02m03s` / `2m03s` / `3s`.
-fn hms(s: f64) -> String {
+pub fn hms(s: f64) -> String {
     let s = s.max(0.0).round() as u64;
     match (s / 3600, s / 60 % 60, s % 60) {
         (0, 0, sec) => format!("{sec}s"),
