@@ -15,8 +15,10 @@ use std::path::{Path, PathBuf};
 /// One finished point of one invocation.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CostRow {
-    /// When the invocation started, Unix seconds: the lines of one invocation share it.
-    pub invocation: u64,
+    /// When the invocation started, Unix seconds to the nanosecond (whole seconds in records
+    /// written before the nanoseconds were kept): the lines of one invocation share it, and it
+    /// tells invocations apart. Kept as written, so an older record reads back unchanged.
+    pub invocation: String,
     /// The point: a sequence, with its perturbation and draw when it has one.
     pub point: String,
     /// Runs recorded at this point.
@@ -111,7 +113,7 @@ pub struct CostTotal {
 impl CostTotal {
     /// Sums `rows`.
     pub fn of(rows: &[CostRow]) -> CostTotal {
-        let mut inv: Vec<u64> = rows.iter().map(|r| r.invocation).collect();
+        let mut inv: Vec<&str> = rows.iter().map(|r| r.invocation.as_str()).collect();
         inv.sort_unstable();
         inv.dedup();
         CostTotal {
@@ -164,9 +166,9 @@ mod tests {
         d
     }
 
-    fn row(invocation: u64, point: &str, frames: usize, cpu_s: f64) -> CostRow {
+    fn row(invocation: &str, point: &str, frames: usize, cpu_s: f64) -> CostRow {
         CostRow {
-            invocation,
+            invocation: invocation.into(),
             point: point.into(),
             runs: 5,
             frames,
@@ -179,15 +181,20 @@ mod tests {
     fn lines_appended_by_two_invocations_read_back_and_sum() {
         let dir = tmpdir("sum");
         let rows = [
-            row(10, "twin_a", 1000, 10.0),
-            row(10, "twin_b [depth-axial:2]", 500, 2.5),
-            row(20, "twin_c", 1500, 7.5),
+            row("10", "twin_a", 1000, 10.0),
+            row("10", "twin_b [depth-axial:2]", 500, 2.5),
+            row("20.000000001", "twin_c", 1500, 7.5),
         ];
         for r in &rows {
             append(dir.as_path(), None, r).unwrap();
         }
         let shard = Shard { index: 1, count: 2 };
-        append(dir.as_path(), Some(shard), &row(30, "twin_d", 100, 1.0)).unwrap();
+        append(
+            dir.as_path(),
+            Some(shard),
+            &row("20.000000002", "twin_d", 100, 1.0),
+        )
+        .unwrap();
         let back = load_dir(dir.as_path()).unwrap();
         assert_eq!(&back[..3], &rows[..]);
         assert_eq!(back.len(), 4);
@@ -209,7 +216,7 @@ mod tests {
     #[test]
     fn a_torn_last_line_is_skipped_and_a_bad_line_refused_with_its_place() {
         let dir = tmpdir("torn");
-        append(dir.as_path(), None, &row(1, "a", 10, 1.0)).unwrap();
+        append(dir.as_path(), None, &row("1", "a", 10, 1.0)).unwrap();
         let path = dir.as_path().join("cost.csv");
         let mut text = std::fs::read_to_string(&path).unwrap();
         text.push_str("1,b,5,1");

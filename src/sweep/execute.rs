@@ -576,7 +576,7 @@ fn point_done(cx: &Phase<'_>, what: &str) -> Result<()> {
         &cx.req.out,
         cx.req.shard,
         &crate::sweep::cost::CostRow {
-            invocation: cx.progress.started_unix,
+            invocation: cx.progress.started_unix.clone(),
             point: what.to_string(),
             runs: c.runs,
             frames: c.frames,

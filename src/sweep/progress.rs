@@ -21,8 +21,9 @@ pub struct Progress {
     since: Instant,
     /// The process's CPU seconds when the invocation started.
     cpu_since: f64,
-    /// When the invocation started, Unix seconds (its cost lines' `invocation`).
-    pub started_unix: u64,
+    /// When the invocation started, Unix seconds to the nanosecond (its cost lines'
+    /// `invocation`): two invocations a second apart, as a quick resume makes, stay apart.
+    pub started_unix: String,
     /// The cost when the previous point ended ([`Progress::point_cost`]).
     last_point: Mutex<Cost>,
     /// Runs of the sweep (this shard) and how many were recorded before this invocation.
@@ -64,7 +65,10 @@ impl Progress {
             cpu_since: process_cpu_s(),
             started_unix: std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
-                .map_or(0, |d| d.as_secs()),
+                .map_or_else(
+                    |_| "0".into(),
+                    |d| format!("{}.{:09}", d.as_secs(), d.subsec_nanos()),
+                ),
             last_point: Mutex::new(Cost::default()),
             total,
             done_before: done,
