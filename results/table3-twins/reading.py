@@ -9,7 +9,11 @@ print("row | twin ORB mm [CI] | paper mm | paper/twin | verdict")
 hard = collections.Counter()
 for s, r in orb.items():
     m, lo, hi, p = (float(r[k]) * 1e3 for k in ('mean_m', 'ci95_lo_m', 'ci95_hi_m', 'paper_m'))
-    v = 'as hard (paper inside CI)' if lo <= p <= hi else ('easier' if p > hi else 'harder')
+    # A twin on which most runs fail is harder than its real sequence, where ORB-SLAM2 ran through.
+    if 2 * int(r['failed']) > int(r['runs']):
+        v = 'harder (most runs fail)'
+    else:
+        v = 'as hard (paper inside CI)' if lo <= p <= hi else ('easier' if p > hi else 'harder')
     hard[v] += 1
     print(f"{s} | {m:.2f} [{lo:.2f}, {hi:.2f}] | {p:g} | {p/m:.1f}x | {v} | failed {r['failed']}")
 print(hard)
