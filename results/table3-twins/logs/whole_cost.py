@@ -1,0 +1,43 @@
+# The whole table3-twins sweep's cost, row by row, from what was measured: MH01, MH02, MH03 and
+# MH05 from the log of the invocation that ran them (before cost.csv existed), the EuRoC rows
+# after them from cost.csv, the TUM rows from their re-measure (logs/remeasure-tum/cost.csv:
+# the same runs made again, bit for bit, by a binary that keeps its cost), fr3_nst from its
+# control run (logs/control-fr3_nst.log). V202's line covers
+# 27 of its 50 runs (a restart); its other 23 are composed from those 27 (their CPU-s per run
+# beyond the rendering, 0.308 CPU-s a frame in render-speed/, and the extraction of the log).
+# Run from results/table3-twins: python3 logs/whole_cost.py
+import csv, re, os
+rows = {}
+pat = re.compile(r"sweep: (\S+) done; .*? (\S+) elapsed.*?; (\d+) frames run in (\d+) CPU-s")
+def secs(h):
+    m = re.fullmatch(r"(?:(\d+)h)?(?:(\d+)m)?(\d+)s", h)
+    a = [int(x or 0) for x in m.groups()]
+    return a[0] * 3600 + a[1] * 60 + a[2]
+prev = (0, 0, 0)
+for line in open('logs/sweep-2026-11-29.log'):
+    m = pat.search(line)
+    if m:
+        f, c, w = int(m.group(3)), int(m.group(4)), secs(m.group(2))
+        rows[m.group(1)] = [f - prev[0], c - prev[1], w - prev[2], 'log']
+        prev = (f, c, w)
+for line in open('logs/control-fr3_nst.log'):
+    m = pat.search(line)
+    if m:
+        rows[m.group(1)] = [int(m.group(3)), int(m.group(4)), secs(m.group(2)), 'control']
+for path, src in (('cost.csv', 'cost.csv'), ('logs/remeasure-tum/cost.csv', 're-measure')):
+    if os.path.exists(path):
+        for r in csv.DictReader(open(path)):
+            rows[r['point']] = [int(r['frames']), float(r['cpu_s']), float(r['wall_s']), src]
+if 'twin_v202' in rows:
+    f, c, w, _ = rows['twin_v202']
+    frames, render, extraction = 2308, 2308 * 0.308, 22.1
+    per_run = (c - render - extraction) / 27
+    rows['twin_v202'] = [frames * 50, c + 23 * per_run, w * (c + 23 * per_run) / c, 'composed']
+print("| row | frames run | CPU-s | frames/s per core | wall s (cores busy) | from |")
+print("|---|---|---|---|---|---|")
+tf = tc = tw = 0
+for k, (f, c, w, src) in sorted(rows.items()):
+    print(f"| {k} | {f:,} | {c:,.0f} | {f / c:.0f} | {w:,.0f} ({c / w:.1f}) | {src} |")
+    tf += f; tc += c; tw += w
+print(f"| {len(rows)} rows | {tf:,} | {tc:,.0f} | {tf / tc:.1f} | | |")
+print(f"on two busy cores: {tc / 2 / 3600:.2f} h")
