@@ -162,7 +162,8 @@ impl ExtractedSequence {
         self.frames.iter().map(|f| f.features.heap_bytes()).sum()
     }
 
-    /// Total extraction time, seconds of one core.
+    /// Total extraction time: the frames' wall times summed, seconds (of one core when no other
+    /// work shared it; [`Self::extraction_cpu_s`] is the CPU time).
     pub fn extraction_s(&self) -> f64 {
         self.frames.iter().map(|f| f.extraction_ms).sum::<f64>() / 1e3
     }

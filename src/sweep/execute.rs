@@ -675,13 +675,18 @@ pub fn extract(
     if !cx.req.quiet {
         let n: usize = extracted.iter().map(|e| e.frames.len()).sum();
         let bytes: usize = extracted.iter().map(ExtractedSequence::heap_bytes).sum();
-        let cpu: f64 = extracted.iter().map(ExtractedSequence::extraction_s).sum();
+        // The workers' own clocks: the frames' wall times summed would count, on a shared machine,
+        // the time a worker waited for its core.
+        let cpu: f64 = extracted
+            .iter()
+            .map(ExtractedSequence::extraction_cpu_s)
+            .sum();
         let note = if reuse {
             format!(
-                "ORB of the unperturbed frames {how} ({cpu:.1} s of one core once per sequence), depth and stamps attached"
+                "ORB of the unperturbed frames {how} ({cpu:.1} CPU-s once per sequence), depth and stamps attached"
             )
         } else {
-            format!("{cpu:.1} s of one core")
+            format!("{cpu:.1} CPU-s")
         };
         cx.progress.note(&format!(
             "{what}: features of {n} frames in {:.1} s ({note}, {:.0} KB per frame, shared by {runs} runs)",
