@@ -5,8 +5,9 @@
 # control run (logs/control-fr3_nst.log). V202's line covers
 # 27 of its 50 runs (a restart); its other 23 are composed from those 27 (their CPU-s per run
 # beyond the rendering, 0.308 CPU-s a frame in render-speed/, and the extraction of the log).
-# Run from results/table3-twins: python3 logs/whole_cost.py
+# python3 results/table3-twins/logs/whole_cost.py (from any folder)
 import csv, re, os
+os.chdir(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
 rows = {}
 pat = re.compile(r"sweep: (\S+) done; .*? (\S+) elapsed.*?; (\d+) frames run in (\d+) CPU-s")
 def secs(h):
