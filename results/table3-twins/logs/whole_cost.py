@@ -36,9 +36,9 @@ if 'twin_v202' in rows:
     rows['twin_v202'] = [frames * 50, c + 23 * per_run, w * (c + 23 * per_run) / c, 'composed']
 print("| row | frames run | CPU-s | frames/s per core | wall s (cores busy) | from |")
 print("|---|---|---|---|---|---|")
-tf = tc = tw = 0
+tf = tc = 0
 for k, (f, c, w, src) in sorted(rows.items()):
     print(f"| {k} | {f:,} | {c:,.0f} | {f / c:.0f} | {w:,.0f} ({c / w:.1f}) | {src} |")
-    tf += f; tc += c; tw += w
+    tf += f; tc += c
 print(f"| {len(rows)} rows | {tf:,} | {tc:,.0f} | {tf / tc:.1f} | | |")
 print(f"on two busy cores: {tc / 2 / 3600:.2f} h")
