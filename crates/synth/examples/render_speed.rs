@@ -1,7 +1,12 @@
 //! CPU seconds per frame of the renderer on a few twins, and a fingerprint of the frames it
 //! made, to show that a faster renderer gives the same bytes:
-//! `RAYON_NUM_THREADS=1 cargo run --release -p synth --example render_speed -- [FRAMES] [TWINS]`
+//! `RAYON_NUM_THREADS=1 cargo run --release -p synth --example render_speed -- [FRAMES] [TWINS] [one-ray]`
 //! (TWINS: comma-separated preset names; default fr1_desk, fr3_w_rpy, fr2_coke, v101).
+//!
+//! With `one-ray`, each twin is rendered with one exposure time sample per pixel and no
+//! anti-aliasing: one colour ray per pixel (and, as always, one for depth). Those are not the
+//! twin's bytes: the figure bounds what any renderer that changes bytes by casting fewer rays
+//! could gain while everything else about making a frame stays as it is.
 //!
 //! Frames 0..FRAMES are generated in order, as `noisefree synth` does (the auto-exposure's
 //! metering previews are cached and reused); the CPU time is the process's user + system time
@@ -9,7 +14,7 @@
 //! the machine runs. The fingerprint is an FNV-1a hash of every frame's images, depths, mask
 //! and pose, bit for bit.
 
-use synth::{Generator, SynthConfig};
+use synth::{Generator, Supersampling, SynthConfig};
 
 /// Process user + system CPU time, seconds (Linux).
 fn cpu_seconds() -> f64 {
@@ -38,10 +43,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(2)
         .cloned()
         .unwrap_or_else(|| "twin_fr1_desk,twin_fr3_w_rpy,twin_fr2_coke,twin_v101".into());
-    println!("frames 0..{n}, one line per twin: setup CPU s, CPU s per frame, FNV-1a of frames");
+    let one_ray = match args.get(3).map(String::as_str) {
+        None => false,
+        Some("one-ray") => true,
+        Some(other) => return Err(format!("unknown mode `{other}` (expected `one-ray`)").into()),
+    };
+    println!(
+        "frames 0..{n}{}, one line per twin: setup CPU s, CPU s per frame, FNV-1a of frames",
+        if one_ray {
+            ", one colour ray per pixel"
+        } else {
+            ""
+        }
+    );
     for name in twins.split(',') {
         let c0 = cpu_seconds();
-        let gen = Generator::try_new(SynthConfig::preset(name)?, 1)?;
+        let mut config = SynthConfig::preset(name)?;
+        if one_ray {
+            if let Some(e) = config.imaging.exposure.as_mut() {
+                e.samples = 1;
+            }
+            config.image.supersampling = Supersampling::None;
+        }
+        let gen = Generator::try_new(config, 1)?;
         let c1 = cpu_seconds();
         let mut h = 0xcbf2_9ce4_8422_2325u64;
         for i in 0..n {

@@ -2,9 +2,10 @@
 # MH05 from the log of the invocation that ran them (before cost.csv existed), the EuRoC rows
 # after them from cost.csv, the TUM rows from their re-measure (logs/remeasure-tum/cost.csv:
 # the same runs made again, bit for bit, by a binary that keeps its cost), fr3_nst from its
-# control run (logs/control-fr3_nst.log). V202's line covers
-# 27 of its 50 runs (a restart); its other 23 are composed from those 27 (their CPU-s per run
-# beyond the rendering, 0.308 CPU-s a frame in render-speed/, and the extraction of the log).
+# control run (logs/control-fr3_nst.log). A row whose cost line covers fewer than its 50 runs
+# (an invocation restarted inside the row: V202, and fr1_teddy of the re-measure) is composed:
+# its missing runs are charged what its measured ones cost beyond the rendering (the twin's CPU
+# s per frame in render-speed/) and the extraction (the log's "features of" line).
 # python3 results/table3-twins/logs/whole_cost.py (from any folder)
 import csv, re, os
 os.chdir(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'))
@@ -25,15 +26,33 @@ for line in open('logs/control-fr3_nst.log'):
     m = pat.search(line)
     if m:
         rows[m.group(1)] = [int(m.group(3)), int(m.group(4)), secs(m.group(2)), 'control']
+measured_runs = {}
 for path, src in (('cost.csv', 'cost.csv'), ('logs/remeasure-tum/cost.csv', 're-measure')):
     if os.path.exists(path):
         for r in csv.DictReader(open(path)):
             rows[r['point']] = [int(r['frames']), float(r['cpu_s']), float(r['wall_s']), src]
-if 'twin_v202' in rows:
-    f, c, w, _ = rows['twin_v202']
-    frames, render, extraction = 2308, 2308 * 0.308, 22.1
-    per_run = (c - render - extraction) / 27
-    rows['twin_v202'] = [frames * 50, c + 23 * per_run, w * (c + 23 * per_run) / c, 'composed']
+            measured_runs[r['point']] = int(r['runs'])
+render_s = {}
+for line in open('../render-speed/README.md'):
+    if line.startswith('## '):
+        break  # the first table: the shipped renderer's CPU s per frame, "after"
+    m = re.match(r"\| (twin_\w+) \| [\d.]+ \| ([\d.]+) \|", line)
+    if m:
+        render_s[m.group(1)] = float(m.group(2))
+extraction = {}
+for log in ('logs/sweep-2026-11-29b.log', 'logs/remeasure-tum/sweep.log'):
+    if os.path.exists(log):
+        for line in open(log):
+            m = re.match(r"(twin_\w+): features of (\d+) frames in [\d.]+ s \(([\d.]+) (?:s of one core|CPU-s)", line)
+            if m:
+                extraction[m.group(1)] = (int(m.group(2)), float(m.group(3)))
+for k, (f, c, w, src) in list(rows.items()):
+    runs = measured_runs.get(k, 50)
+    if runs < 50:
+        frames, extract = extraction[k]
+        per_run = (c - frames * render_s[k] - extract) / runs
+        whole = c + (50 - runs) * per_run
+        rows[k] = [frames * 50, whole, w * whole / c, f'composed ({runs} runs measured)']
 print("| row | frames run | CPU-s | frames/s per core | wall s (cores busy) | from |")
 print("|---|---|---|---|---|---|")
 tf = tc = 0
