@@ -8,10 +8,16 @@
 //! with **Holm's** step-down procedure, so a difference a table marks survives the number of
 //! comparisons that table made.
 //!
-//! Relative differences: the interval of the difference of means divided by the baseline's
-//! mean (the baseline mean's own uncertainty is not propagated; with the n = 10 of a sweep its
-//! interval is printed beside it). Distributions come from statrs; the values are tested
-//! against scipy's and statsmodels' (the numbers committed in the tests).
+//! Relative differences: the other system's mean as a share of the baseline's, with **Fieller's**
+//! 95 % interval of that ratio (Fieller 1954): the ratios `r` for which `other - r baseline`
+//! passes the same t-test (same pairing, same degrees of freedom). The baseline mean's own
+//! uncertainty enters (the difference's interval over the baseline's mean, used before, passed
+//! -100 % wherever the baseline's runs spread widely; Fieller's does only where the other
+//! system's mean is itself not told from zero), and it excludes 0 % exactly when the
+//! difference's interval excludes 0. When the baseline's mean is not told from zero at that
+//! level the set of ratios is unbounded, and the tables say so. Distributions come from
+//! statrs; the values are tested against scipy's and statsmodels' (the numbers committed in the
+//! tests).
 
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -131,6 +137,9 @@ pub struct Comparison {
     pub diff: f64,
     /// Its 95 % interval.
     pub diff_ci95: (f64, f64),
+    /// Fieller's 95 % interval of the ratio of the means, other over baseline; `None` when it
+    /// is unbounded (the baseline's mean not told from zero).
+    pub ratio_ci95: Option<(f64, f64)>,
     /// Degrees of freedom of the t distribution used.
     pub df: f64,
     /// The t statistic.
@@ -145,39 +154,63 @@ impl Comparison {
         100.0 * self.diff / self.baseline_mean
     }
 
-    /// The interval of [`Comparison::relative_pct`], in %.
+    /// The interval of [`Comparison::relative_pct`], in %: Fieller's interval of the ratio of
+    /// the means, less one; `(-inf, +inf)` when that interval is unbounded.
     pub fn relative_ci95_pct(&self) -> (f64, f64) {
-        (
-            100.0 * self.diff_ci95.0 / self.baseline_mean,
-            100.0 * self.diff_ci95.1 / self.baseline_mean,
-        )
+        match self.ratio_ci95 {
+            Some((lo, hi)) => (100.0 * (lo - 1.0), 100.0 * (hi - 1.0)),
+            None => (f64::NEG_INFINITY, f64::INFINITY),
+        }
     }
+}
+
+/// The means of two groups and the variances of those means (their squared standard errors)
+/// and covariance (zero for independent groups): what Fieller's interval needs.
+#[derive(Clone, Copy, Debug)]
+struct Means {
+    baseline: f64,
+    other: f64,
+    var_baseline: f64,
+    var_other: f64,
+    cov: f64,
+}
+
+/// Fieller's interval of `other / baseline` at the t quantile `q`: the ratios `r` with
+/// `(other - r baseline)^2 <= q^2 (var_other - 2 r cov + r^2 var_baseline)`. `None` when that
+/// set is unbounded (`baseline^2 <= q^2 var_baseline`). Exact groups (no variance) give the
+/// ratio itself.
+fn fieller(m: Means, q: f64) -> Option<(f64, f64)> {
+    let q2 = q * q;
+    let a = m.baseline * m.baseline - q2 * m.var_baseline;
+    if a.is_nan() || a <= 0.0 {
+        return None;
+    }
+    let b = m.other * m.baseline - q2 * m.cov;
+    let c = m.other * m.other - q2 * m.var_other;
+    // Non-negative in exact arithmetic when a > 0 (the quadratic is <= 0 at other / baseline).
+    let root = (b * b - a * c).max(0.0).sqrt();
+    Some(((b - root) / a, (b + root) / a))
 }
 
 /// A t-based comparison from its difference, standard error and degrees of freedom; a zero
 /// standard error (identical runs, or differences that do not vary) gives p = 1 for no
 /// difference and p = 0 for one, with an interval of width zero.
-fn from_t(
-    test: Test,
-    n: (usize, usize),
-    baseline_mean: f64,
-    diff: f64,
-    se: f64,
-    df: f64,
-) -> Comparison {
-    let (t, half) = if se > 0.0 && df.is_finite() && df > 0.0 {
-        (diff / se, t_quantile(df, 0.975) * se)
+fn from_t(test: Test, n: (usize, usize), means: Means, diff: f64, se: f64, df: f64) -> Comparison {
+    let (t, q) = if se > 0.0 && df.is_finite() && df > 0.0 {
+        (diff / se, t_quantile(df, 0.975))
     } else if diff == 0.0 {
         (f64::NAN, 0.0)
     } else {
         (diff.signum() * f64::INFINITY, 0.0)
     };
+    let half = q * se;
     Comparison {
         test,
         n,
-        baseline_mean,
+        baseline_mean: means.baseline,
         diff,
         diff_ci95: (diff - half, diff + half),
+        ratio_ci95: fieller(means, q),
         df,
         t,
         p: two_sided_p(t, df),
@@ -195,10 +228,24 @@ pub fn paired(baseline: &[f64], other: &[f64]) -> Option<Comparison> {
     let mean_d = d.iter().sum::<f64>() / n as f64;
     let se = (variance(&d, mean_d) / n as f64).sqrt();
     let base_mean = baseline.iter().sum::<f64>() / n as f64;
+    let other_mean = other.iter().sum::<f64>() / n as f64;
+    let cov = baseline
+        .iter()
+        .zip(other)
+        .map(|(b, o)| (b - base_mean) * (o - other_mean))
+        .sum::<f64>()
+        / (n - 1) as f64;
+    let means = Means {
+        baseline: base_mean,
+        other: other_mean,
+        var_baseline: variance(baseline, base_mean) / n as f64,
+        var_other: variance(other, other_mean) / n as f64,
+        cov: cov / n as f64,
+    };
     Some(from_t(
         Test::Paired,
         (n, n),
-        base_mean,
+        means,
         mean_d,
         se,
         (n - 1) as f64,
@@ -219,7 +266,21 @@ pub fn welch(baseline: &[f64], other: &[f64]) -> Option<Comparison> {
     );
     let se2 = vb + vo;
     let df = se2 * se2 / (vb * vb / (nb - 1) as f64 + vo * vo / (no - 1) as f64);
-    Some(from_t(Test::Welch, (nb, no), mb, mo - mb, se2.sqrt(), df))
+    let means = Means {
+        baseline: mb,
+        other: mo,
+        var_baseline: vb,
+        var_other: vo,
+        cov: 0.0,
+    };
+    Some(from_t(
+        Test::Welch,
+        (nb, no),
+        means,
+        mo - mb,
+        se2.sqrt(),
+        df,
+    ))
 }
 
 /// Holm's step-down adjustment of `p` (in the input's order): the k-th smallest p times
@@ -274,6 +335,99 @@ mod tests {
         close(c.df, 4.31542802052);
         close(c.diff_ci95.0, -0.58374733676);
         close(c.diff_ci95.1, 1.02374733676);
+    }
+
+    // Fieller's interval, reference values from the formula evaluated in Python with scipy's
+    // t quantile (scipy has no Fieller function): the roots of
+    // (o - r b)^2 = q^2 (var_o - 2 r cov + r^2 var_b) with the means' variances and covariance.
+    #[test]
+    fn fieller_ratio_interval_matches_its_reference_values() {
+        let c = paired(&B, &O).unwrap();
+        let (lo, hi) = c.ratio_ci95.unwrap();
+        close(lo, 0.9249512305689327);
+        close(hi, 0.9634845841200685);
+        let (plo, phi) = c.relative_ci95_pct();
+        close(plo, 100.0 * (0.9249512305689327 - 1.0));
+        close(phi, 100.0 * (0.9634845841200685 - 1.0));
+        let w = welch(&B, &W).unwrap();
+        let (lo, hi) = w.ratio_ci95.unwrap();
+        close(lo, 0.8585927299318481);
+        close(hi, 1.251770979727761);
+    }
+
+    /// The Fieller statistic of ratio `r`: `(o - r b)^2 / (var_o - 2 r cov + r^2 var_b)`.
+    fn fieller_statistic(m: Means, r: f64) -> f64 {
+        (m.other - r * m.baseline).powi(2)
+            / (m.var_other - 2.0 * r * m.cov + r * r * m.var_baseline)
+    }
+
+    #[test]
+    fn fieller_bounds_solve_its_equation_and_agree_with_the_t_test() {
+        // A baseline that spreads widely against a steady, much better system (the shape of rc
+        // on the walking twins): the difference over the baseline's mean passes -100 %, the
+        // ratio's interval does not.
+        let wide_b = [0.02, 0.09, 0.15, 0.04, 0.12, 0.03, 0.11, 0.08, 0.16, 0.05];
+        let good = [
+            0.002, 0.0021, 0.0019, 0.002, 0.0022, 0.0018, 0.002, 0.0021, 0.0019, 0.002,
+        ];
+        let c = welch(&wide_b, &good).unwrap();
+        let old_lo = 100.0 * c.diff_ci95.0 / c.baseline_mean;
+        assert!(old_lo < -100.0, "{old_lo}");
+        let (lo, hi) = c.relative_ci95_pct();
+        assert!((lo - -98.3459783921779).abs() < 1e-6, "{lo}");
+        assert!((hi - -95.9492090254223).abs() < 1e-6, "{hi}");
+        for (b, o, pairs) in [
+            (&wide_b[..], &good[..], false),
+            (&B[..], &O[..], true),
+            (&B[..], &W[..], false),
+        ] {
+            let c = if pairs { paired(b, o) } else { welch(b, o) }.unwrap();
+            let n = |x: &[f64]| x.len() as f64;
+            let mean = |x: &[f64]| x.iter().sum::<f64>() / n(x);
+            let (mb, mo) = (mean(b), mean(o));
+            let cov = if pairs {
+                b.iter()
+                    .zip(o)
+                    .map(|(x, y)| (x - mb) * (y - mo))
+                    .sum::<f64>()
+                    / (n(b) - 1.0)
+                    / n(b)
+            } else {
+                0.0
+            };
+            let m = Means {
+                baseline: mb,
+                other: mo,
+                var_baseline: variance(b, mb) / n(b),
+                var_other: variance(o, mo) / n(o),
+                cov,
+            };
+            let q = t_quantile(c.df, 0.975);
+            let (lo, hi) = c.ratio_ci95.unwrap();
+            // Both bounds solve the defining equation, the estimate lies between them.
+            for r in [lo, hi] {
+                assert!(
+                    (fieller_statistic(m, r) - q * q).abs() < 1e-6 * q * q,
+                    "{r}"
+                );
+            }
+            assert!(lo < mo / mb && mo / mb < hi);
+            // Ratio 1 is outside exactly when the difference's interval excludes 0.
+            let excludes_one = !(lo..=hi).contains(&1.0);
+            let excludes_zero = c.diff_ci95.0 > 0.0 || c.diff_ci95.1 < 0.0;
+            assert_eq!(excludes_one, excludes_zero);
+        }
+    }
+
+    #[test]
+    fn fieller_is_unbounded_when_the_baseline_mean_is_not_told_from_zero() {
+        // Two baseline runs far apart: t(1 df) = 12.7 swamps their mean.
+        let c = welch(&[0.1, 10.0], &[1.0, 1.1, 0.9]).unwrap();
+        assert_eq!(c.ratio_ci95, None);
+        assert_eq!(c.relative_ci95_pct(), (f64::NEG_INFINITY, f64::INFINITY));
+        // Identical runs: no spread, the ratio itself.
+        let same = paired(&B, &B).unwrap();
+        assert_eq!(same.ratio_ci95, Some((1.0, 1.0)));
     }
 
     #[test]

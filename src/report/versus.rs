@@ -297,11 +297,16 @@ pub fn holm_where_tested<'a>(
         .collect()
 }
 
-/// A difference against the baseline as the tables print it, `+1.2 % [-0.3, +2.7]`, in bold
-/// when it survives Holm's correction.
+/// A difference against the baseline as the tables print it, `+1.2 % [-0.3, +2.7]` (Fieller's
+/// interval; `[unbounded]` when the baseline's mean is not told from zero), in bold when it
+/// survives Holm's correction.
 pub fn difference_text(c: &Comparison, survives: bool) -> String {
     let (lo, hi) = c.relative_ci95_pct();
-    let t = format!("{:+.1} % [{:+.1}, {:+.1}]", c.relative_pct(), lo, hi);
+    let t = if lo.is_finite() && hi.is_finite() {
+        format!("{:+.1} % [{:+.1}, {:+.1}]", c.relative_pct(), lo, hi)
+    } else {
+        format!("{:+.1} % [unbounded]", c.relative_pct())
+    };
     if survives {
         format!("**{t}**")
     } else {
