@@ -13,9 +13,10 @@
 //! passes the same t-test (same pairing, same degrees of freedom). The baseline mean's own
 //! uncertainty enters (the difference's interval over the baseline's mean, used before, passed
 //! -100 % wherever the baseline's runs spread widely; Fieller's does only where the other
-//! system's mean is itself not told from zero), and it excludes 0 % exactly when the
-//! difference's interval excludes 0. When the baseline's mean is not told from zero at that
-//! level the set of ratios is unbounded, and the tables say so. Distributions come from
+//! system's mean is itself not told from zero), and a bounded one excludes 0 % exactly when
+//! the difference's interval excludes 0. When the baseline's mean is not told from zero at that
+//! level the set of ratios reaches both infinities; the tables say `[unbounded]` and the
+//! p-value alone gives the verdict. Distributions come from
 //! statrs; the values are tested against scipy's and statsmodels' (the numbers committed in the
 //! tests).
 
