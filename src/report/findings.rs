@@ -9,7 +9,7 @@
 //! that says how large a difference the data leave room for.
 
 use crate::report::stats::holm;
-use crate::report::versus::ALPHA;
+use crate::report::versus::{relative_text, ALPHA};
 use anyhow::{Context, Result};
 use datasets::Catalog;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
@@ -118,9 +118,9 @@ pub fn read_versus(dir: &Path) -> Result<Vec<VersusRow>> {
     Ok(out)
 }
 
-/// A row's difference as the findings print it: `-12.3 % [-20.1, -4.5]`.
+/// A row's difference as the findings print it, as its table does: `-12.3 % [-20.1, -4.5]`.
 fn diff_text(d: (f64, f64, f64)) -> String {
-    format!("{:+.1} % [{:+.1}, {:+.1}]", d.0, d.1, d.2)
+    relative_text(d.0, (d.1, d.2))
 }
 
 /// The verdict on a claimed gain from one comparison.

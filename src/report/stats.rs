@@ -176,6 +176,34 @@ struct Means {
     cov: f64,
 }
 
+impl Means {
+    /// The means of `baseline` and `other`, their variances (sample variance over n) and,
+    /// when the runs are `paired` (equal lengths, run i of both matched), their covariance.
+    fn of(baseline: &[f64], other: &[f64], paired: bool) -> Means {
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+        let (mb, mo) = (mean(baseline), mean(other));
+        let cov = if paired {
+            let n = baseline.len();
+            baseline
+                .iter()
+                .zip(other)
+                .map(|(b, o)| (b - mb) * (o - mo))
+                .sum::<f64>()
+                / (n - 1) as f64
+                / n as f64
+        } else {
+            0.0
+        };
+        Means {
+            baseline: mb,
+            other: mo,
+            var_baseline: variance(baseline, mb) / baseline.len() as f64,
+            var_other: variance(other, mo) / other.len() as f64,
+            cov,
+        }
+    }
+}
+
 /// Fieller's interval of `other / baseline` at the t quantile `q`: the ratios `r` with
 /// `(other - r baseline)^2 <= q^2 (var_other - 2 r cov + r^2 var_baseline)`. `None` when that
 /// set is unbounded (`baseline^2 <= q^2 var_baseline`). Exact groups (no variance) give the
@@ -228,25 +256,10 @@ pub fn paired(baseline: &[f64], other: &[f64]) -> Option<Comparison> {
     let d: Vec<f64> = other.iter().zip(baseline).map(|(o, b)| o - b).collect();
     let mean_d = d.iter().sum::<f64>() / n as f64;
     let se = (variance(&d, mean_d) / n as f64).sqrt();
-    let base_mean = baseline.iter().sum::<f64>() / n as f64;
-    let other_mean = other.iter().sum::<f64>() / n as f64;
-    let cov = baseline
-        .iter()
-        .zip(other)
-        .map(|(b, o)| (b - base_mean) * (o - other_mean))
-        .sum::<f64>()
-        / (n - 1) as f64;
-    let means = Means {
-        baseline: base_mean,
-        other: other_mean,
-        var_baseline: variance(baseline, base_mean) / n as f64,
-        var_other: variance(other, other_mean) / n as f64,
-        cov: cov / n as f64,
-    };
     Some(from_t(
         Test::Paired,
         (n, n),
-        means,
+        Means::of(baseline, other, true),
         mean_d,
         se,
         (n - 1) as f64,
@@ -259,26 +272,15 @@ pub fn welch(baseline: &[f64], other: &[f64]) -> Option<Comparison> {
     if nb < 2 || no < 2 {
         return None;
     }
-    let mb = baseline.iter().sum::<f64>() / nb as f64;
-    let mo = other.iter().sum::<f64>() / no as f64;
-    let (vb, vo) = (
-        variance(baseline, mb) / nb as f64,
-        variance(other, mo) / no as f64,
-    );
+    let means = Means::of(baseline, other, false);
+    let (vb, vo) = (means.var_baseline, means.var_other);
     let se2 = vb + vo;
     let df = se2 * se2 / (vb * vb / (nb - 1) as f64 + vo * vo / (no - 1) as f64);
-    let means = Means {
-        baseline: mb,
-        other: mo,
-        var_baseline: vb,
-        var_other: vo,
-        cov: 0.0,
-    };
     Some(from_t(
         Test::Welch,
         (nb, no),
         means,
-        mo - mb,
+        means.other - means.baseline,
         se2.sqrt(),
         df,
     ))
@@ -383,26 +385,7 @@ mod tests {
             (&B[..], &W[..], false),
         ] {
             let c = if pairs { paired(b, o) } else { welch(b, o) }.unwrap();
-            let n = |x: &[f64]| x.len() as f64;
-            let mean = |x: &[f64]| x.iter().sum::<f64>() / n(x);
-            let (mb, mo) = (mean(b), mean(o));
-            let cov = if pairs {
-                b.iter()
-                    .zip(o)
-                    .map(|(x, y)| (x - mb) * (y - mo))
-                    .sum::<f64>()
-                    / (n(b) - 1.0)
-                    / n(b)
-            } else {
-                0.0
-            };
-            let m = Means {
-                baseline: mb,
-                other: mo,
-                var_baseline: variance(b, mb) / n(b),
-                var_other: variance(o, mo) / n(o),
-                cov,
-            };
+            let m = Means::of(b, o, pairs);
             let q = t_quantile(c.df, 0.975);
             let (lo, hi) = c.ratio_ci95.unwrap();
             // Both bounds solve the defining equation, the estimate lies between them.
@@ -412,7 +395,7 @@ mod tests {
                     "{r}"
                 );
             }
-            assert!(lo < mo / mb && mo / mb < hi);
+            assert!(lo < m.other / m.baseline && m.other / m.baseline < hi);
             // Ratio 1 is outside exactly when the difference's interval excludes 0.
             let excludes_one = !(lo..=hi).contains(&1.0);
             let excludes_zero = c.diff_ci95.0 > 0.0 || c.diff_ci95.1 < 0.0;

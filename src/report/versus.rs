@@ -297,16 +297,21 @@ pub fn holm_where_tested<'a>(
         .collect()
 }
 
-/// A difference against the baseline as the tables print it, `+1.2 % [-0.3, +2.7]` (Fieller's
-/// interval; `[unbounded]` when the baseline's mean is not told from zero), in bold when it
-/// survives Holm's correction.
-pub fn difference_text(c: &Comparison, survives: bool) -> String {
-    let (lo, hi) = c.relative_ci95_pct();
-    let t = if lo.is_finite() && hi.is_finite() {
-        format!("{:+.1} % [{:+.1}, {:+.1}]", c.relative_pct(), lo, hi)
+/// A difference in % with its interval, as every table and the findings print it:
+/// `+1.2 % [-0.3, +2.7]`, or `+1.2 % [unbounded]` when an end is infinite (Fieller's interval
+/// when the baseline's mean is not told from zero).
+pub fn relative_text(pct: f64, (lo, hi): (f64, f64)) -> String {
+    if lo.is_finite() && hi.is_finite() {
+        format!("{pct:+.1} % [{lo:+.1}, {hi:+.1}]")
     } else {
-        format!("{:+.1} % [unbounded]", c.relative_pct())
-    };
+        format!("{pct:+.1} % [unbounded]")
+    }
+}
+
+/// A difference against the baseline as the tables print it ([`relative_text`]), in bold when
+/// it survives Holm's correction.
+pub fn difference_text(c: &Comparison, survives: bool) -> String {
+    let t = relative_text(c.relative_pct(), c.relative_ci95_pct());
     if survives {
         format!("**{t}**")
     } else {
@@ -611,6 +616,24 @@ pub(crate) mod tests {
 
     /// Three bit-identical runs per system are one result each: no p-value, however far
     /// apart the two results are (issue 55's 144 stereo cells).
+    #[test]
+    fn an_interval_with_an_infinite_end_prints_as_unbounded() {
+        assert_eq!(
+            relative_text(-12.34, (-20.06, -4.51)),
+            "-12.3 % [-20.1, -4.5]"
+        );
+        assert_eq!(
+            relative_text(69.6, (f64::NEG_INFINITY, f64::INFINITY)),
+            "+69.6 % [unbounded]"
+        );
+        // Two baseline runs far apart: Fieller's interval is unbounded, the table says so.
+        let c = crate::report::stats::welch(&[0.1, 10.0], &[1.0, 1.1, 0.9]).unwrap();
+        assert_eq!(
+            difference_text(&c, false),
+            format!("{:+.1} % [unbounded]", c.relative_pct())
+        );
+    }
+
     #[test]
     fn identical_runs_are_not_tested() {
         let mut recs: Vec<RunRecord> = (0..3).map(|i| record("s", "orb", i, 0.004, None)).collect();
