@@ -87,9 +87,56 @@ pub struct RemapMap {
     map_x: Vec<f32>,
     /// Raw y of each rectified pixel, row-major.
     map_y: Vec<f32>,
+    /// Each rectified pixel's bilinear taps, worked out once: a sequence rectifies every frame
+    /// with the same map, and deriving the taps per frame (floor, bounds, weights) cost more
+    /// than the interpolation itself.
+    taps: Taps,
+}
+
+/// The bilinear taps of every rectified pixel into a raw image of the map's size framed by a
+/// one-pixel black border (so taps that leave the image by a pixel read black without a
+/// bounds check, as [`RemapMap::remap`]'s checked path reads them): the framed index of the
+/// top-left tap and the weights of the right and lower taps, exactly as the checked path
+/// derives them. A pixel that maps wholly outside reads the black corner with zero weights.
+#[derive(Clone, Debug, Default)]
+struct Taps {
+    /// Framed index of each pixel's top-left tap.
+    index: Vec<u32>,
+    /// Weight of the right-hand taps.
+    ax: Vec<f32>,
+    /// Weight of the lower taps.
+    ay: Vec<f32>,
 }
 
 impl RemapMap {
+    /// The map of rectified pixels to raw pixels `map_x`, `map_y` (row-major, `width` x
+    /// `height`, raw images of the same size), with its taps worked out.
+    fn new(width: usize, height: usize, map_x: Vec<f32>, map_y: Vec<f32>) -> RemapMap {
+        let (sw, sh) = (width as i64, height as i64);
+        let mut taps = Taps::default();
+        for (&mx, &my) in map_x.iter().zip(&map_y) {
+            let (x0f, y0f) = (mx.floor(), my.floor());
+            let (x0, y0) = (x0f as i64, y0f as i64);
+            let (index, ax, ay) = if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
+                (0, 0.0, 0.0)
+            } else {
+                // The framed image is (width + 2) wide, raw (0, 0) at framed (1, 1).
+                let framed = (y0 + 1) * (sw + 2) + (x0 + 1);
+                (framed as u32, mx - x0f, my - y0f)
+            };
+            taps.index.push(index);
+            taps.ax.push(ax);
+            taps.ay.push(ay);
+        }
+        RemapMap {
+            width,
+            height,
+            map_x,
+            map_y,
+            taps,
+        }
+    }
+
     /// Raw pixel sampled for rectified pixel (x, y).
     pub fn lookup(&self, x: usize, y: usize) -> (f32, f32) {
         let i = y * self.width + x;
@@ -100,6 +147,36 @@ impl RemapMap {
     /// pixels that map outside `src` are black (none with the default `alpha = 0` intrinsics,
     /// except sub-pixel slivers at the border).
     pub fn remap(&self, src: &GrayImage) -> GrayImage {
+        let (w, h) = (self.width, self.height);
+        let fits = src.width == w && src.height == h && src.data.len() == w * h;
+        // Framed indices must fit the taps' u32.
+        if !fits || (w + 2) * (h + 2) > u32::MAX as usize {
+            return self.remap_checked(src);
+        }
+        let fw = w + 2;
+        // FRAME_SLACK bytes past the frame: the AVX2 path reads each tap pair as 4 bytes.
+        let mut framed = vec![0u8; fw * (h + 2) + FRAME_SLACK];
+        for (row, raw) in framed[fw..]
+            .chunks_exact_mut(fw)
+            .zip(src.data.chunks_exact(w))
+        {
+            row[1..=w].copy_from_slice(raw);
+        }
+        let mut out = GrayImage::new(w, h);
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: `resample_avx2` only enables AVX2 code generation for safe code; the CPU
+            // has AVX2 (checked above).
+            unsafe { resample_avx2(&self.taps, &framed, fw, &mut out.data) };
+            return out;
+        }
+        resample(&self.taps, &framed, fw, &mut out.data);
+        out
+    }
+
+    /// [`RemapMap::remap`] of a raw image of any size, every tap's bounds checked (the
+    /// reference the precomputed taps reproduce bit for bit).
+    fn remap_checked(&self, src: &GrayImage) -> GrayImage {
         let mut out = GrayImage::new(self.width, self.height);
         let (sw, sh) = (src.width as i64, src.height as i64);
         for (o, (&mx, &my)) in out
@@ -107,26 +184,129 @@ impl RemapMap {
             .iter_mut()
             .zip(self.map_x.iter().zip(self.map_y.iter()))
         {
-            let (x0f, y0f) = (mx.floor(), my.floor());
-            let (x0, y0) = (x0f as i64, y0f as i64);
+            let (x0, y0) = (mx.floor() as i64, my.floor() as i64);
             if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
                 continue;
             }
-            let (ax, ay) = (mx - x0f, my - y0f);
-            let px = |x: i64, y: i64| -> f32 {
-                if x < 0 || y < 0 || x >= sw || y >= sh {
-                    0.0
-                } else {
-                    src.data[(y * sw + x) as usize] as f32
-                }
-            };
-            let top = px(x0, y0) * (1.0 - ax) + px(x0 + 1, y0) * ax;
-            let bottom = px(x0, y0 + 1) * (1.0 - ax) + px(x0 + 1, y0 + 1) * ax;
-            let v = top * (1.0 - ay) + bottom * ay;
-            *o = (v + 0.5).clamp(0.0, 255.0) as u8;
+            *o = self.resample_checked(src, mx, my);
         }
         out
     }
+
+    /// The bilinear sample of `src` at raw pixel (mx, my), taps outside the image black.
+    fn resample_checked(&self, src: &GrayImage, mx: f32, my: f32) -> u8 {
+        let (sw, sh) = (src.width as i64, src.height as i64);
+        let (x0f, y0f) = (mx.floor(), my.floor());
+        let (x0, y0) = (x0f as i64, y0f as i64);
+        let (ax, ay) = (mx - x0f, my - y0f);
+        let px = |x: i64, y: i64| -> f32 {
+            if x < 0 || y < 0 || x >= sw || y >= sh {
+                0.0
+            } else {
+                src.data[(y * sw + x) as usize] as f32
+            }
+        };
+        let top = px(x0, y0) * (1.0 - ax) + px(x0 + 1, y0) * ax;
+        let bottom = px(x0, y0 + 1) * (1.0 - ax) + px(x0 + 1, y0 + 1) * ax;
+        grey_of(top * (1.0 - ay) + bottom * ay)
+    }
+}
+
+/// Resamples the framed raw image (`fw` wide) at every pixel's taps into `out`.
+#[inline(always)]
+fn resample(t: &Taps, framed: &[u8], fw: usize, out: &mut [u8]) {
+    for (((o, &k), &ax), &ay) in out.iter_mut().zip(&t.index).zip(&t.ax).zip(&t.ay) {
+        let k = k as usize;
+        let top = framed[k] as f32 * (1.0 - ax) + framed[k + 1] as f32 * ax;
+        let bottom = framed[k + fw] as f32 * (1.0 - ax) + framed[k + fw + 1] as f32 * ax;
+        *o = grey_of(top * (1.0 - ay) + bottom * ay);
+    }
+}
+
+/// Bytes the framed image carries past its last row, so that a 4-byte load at any tap pair
+/// stays inside it.
+const FRAME_SLACK: usize = 3;
+
+/// [`resample`] eight pixels at a time with AVX2: each row's tap pair read as one gathered
+/// 4-byte word, then the same single-precision products and sums in the same order (no fused
+/// multiply-add), so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn resample_avx2(t: &Taps, framed: &[u8], fw: usize, out: &mut [u8]) {
+    use std::arch::x86_64::*;
+    let n = out.len();
+    let last = t.index.iter().copied().max().unwrap_or(0) as usize;
+    assert!(
+        t.index.len() == n && t.ax.len() == n && t.ay.len() == n,
+        "one tap per pixel"
+    );
+    assert!(
+        last + fw + 4 <= framed.len(),
+        "every gather inside the frame"
+    );
+    assert!(i32::try_from(last + fw).is_ok(), "gather offsets fit i32");
+    let lanes = n / 8 * 8;
+    // SAFETY: every load and store below reads or writes 8 elements at i < lanes <= n of
+    // slices with n elements (checked above); the gathers read 4 bytes at framed[k] and
+    // framed[k + fw] for indices k <= last, inside `framed` by the check above.
+    unsafe {
+        let (one, half, zero, top_grey) = (
+            _mm256_set1_ps(1.0),
+            _mm256_set1_ps(0.5),
+            _mm256_setzero_ps(),
+            _mm256_set1_ps(255.0),
+        );
+        let byte = _mm256_set1_epi32(0xff);
+        let row = _mm256_set1_epi32(fw as i32);
+        let base = framed.as_ptr() as *const i32;
+        for i in (0..lanes).step_by(8) {
+            let k = _mm256_loadu_si256(t.index.as_ptr().add(i) as *const __m256i);
+            let ax = _mm256_loadu_ps(t.ax.as_ptr().add(i));
+            let ay = _mm256_loadu_ps(t.ay.as_ptr().add(i));
+            let up = _mm256_i32gather_epi32::<1>(base, k);
+            let down = _mm256_i32gather_epi32::<1>(base, _mm256_add_epi32(k, row));
+            let grey = |w: __m256i, shift: i32| {
+                let v = match shift {
+                    0 => w,
+                    _ => _mm256_srli_epi32::<8>(w),
+                };
+                _mm256_cvtepi32_ps(_mm256_and_si256(v, byte))
+            };
+            let bx = _mm256_sub_ps(one, ax);
+            let top = _mm256_add_ps(
+                _mm256_mul_ps(grey(up, 0), bx),
+                _mm256_mul_ps(grey(up, 8), ax),
+            );
+            let bottom = _mm256_add_ps(
+                _mm256_mul_ps(grey(down, 0), bx),
+                _mm256_mul_ps(grey(down, 8), ax),
+            );
+            let v = _mm256_add_ps(
+                _mm256_mul_ps(top, _mm256_sub_ps(one, ay)),
+                _mm256_mul_ps(bottom, ay),
+            );
+            // (v + 0.5).clamp(0, 255) as u8: max with 0 first maps NaN to 0, as `as u8` does.
+            let v = _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(v, half), zero), top_grey);
+            let q = _mm256_cvttps_epi32(v);
+            let mut lane = [0i32; 8];
+            _mm256_storeu_si256(lane.as_mut_ptr() as *mut __m256i, q);
+            for (o, l) in out[i..i + 8].iter_mut().zip(lane) {
+                *o = l as u8;
+            }
+        }
+    }
+    let tail = Taps {
+        index: t.index[lanes..].to_vec(),
+        ax: t.ax[lanes..].to_vec(),
+        ay: t.ay[lanes..].to_vec(),
+    };
+    resample(&tail, framed, fw, &mut out[lanes..]);
+}
+
+/// A resampled value rounded to a grey level.
+#[inline]
+fn grey_of(v: f32) -> u8 {
+    (v + 0.5).clamp(0.0, 255.0) as u8
 }
 
 /// A rectified stereo rig: rotations, shared intrinsics, baseline and remap maps.
@@ -281,12 +461,7 @@ impl StereoRectification {
                 Translation3::identity(),
                 UnitQuaternion::from_rotation_matrix(&r_left.inverse()),
             );
-        let empty = || RemapMap {
-            width: 0,
-            height: 0,
-            map_x: vec![],
-            map_y: vec![],
-        };
+        let empty = || RemapMap::new(0, 0, vec![], vec![]);
         let mut rect = StereoRectification {
             r_left,
             r_right,
@@ -327,12 +502,7 @@ impl StereoRectification {
                 map_y.push(v as f32);
             }
         }
-        RemapMap {
-            width: w,
-            height: h,
-            map_x,
-            map_y,
-        }
+        RemapMap::new(w, h, map_x, map_y)
     }
 
     /// Raw pixel of the camera (left or `right`) seen at rectified pixel (u, v).
@@ -567,5 +737,70 @@ mod tests {
             data: (0..640 * 480).map(|i| (i * 7 % 251) as u8).collect(),
         };
         assert_eq!(rect.rectify_left(&img).data, img.data);
+    }
+    #[test]
+    fn precomputed_taps_resample_bit_for_bit_as_the_checked_path() {
+        // Raw pixels everywhere a rectified pixel may sample: inside, on every border (taps
+        // half outside), wholly outside, at exact integers and fractions, and NaN.
+        let (w, h) = (37usize, 23usize);
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut map_x = Vec::new();
+        let mut map_y = Vec::new();
+        for i in 0..w * h {
+            let r = next();
+            // A coordinate along an axis of `n` pixels.
+            let pick = |k: u64, n: usize| -> f32 {
+                let n = n as u64;
+                match k % 8 {
+                    0 => (k % (n + 4)) as f32 - 2.0,
+                    1 => -1.5 + (k % 1000) as f32 / 1000.0,
+                    2 => n as f32 - 1.5 + (k % 1000) as f32 / 500.0,
+                    _ => ((k >> 8) % (100 * n)) as f32 / 100.0,
+                }
+            };
+            let (x, y) = if i == 5 {
+                (f32::NAN, 3.0)
+            } else {
+                (pick(r, w), pick(r >> 20, h))
+            };
+            map_x.push(x);
+            map_y.push(y);
+        }
+        let map = RemapMap::new(w, h, map_x.clone(), map_y.clone());
+        let (mut outside, mut border) = (0, 0);
+        for (&x, &y) in map_x.iter().zip(&map_y) {
+            let (x0, y0) = (x.floor() as i64, y.floor() as i64);
+            if x0 < -1 || y0 < -1 || x0 >= w as i64 || y0 >= h as i64 {
+                outside += 1;
+            } else if x0 < 0 || y0 < 0 || x0 + 1 >= w as i64 || y0 + 1 >= h as i64 {
+                border += 1;
+            }
+        }
+        let inside = w * h - outside - border;
+        assert!(
+            outside > 20 && border > 20 && inside > w * h / 4,
+            "every kind drawn"
+        );
+        let img = GrayImage {
+            width: w,
+            height: h,
+            data: (0..w * h).map(|_| next() as u8).collect(),
+        };
+        let fast = map.remap(&img);
+        assert_eq!(fast.data, map.remap_checked(&img).data);
+        assert!(fast.data.iter().filter(|&&v| v != 0).count() > inside / 2);
+        // A raw image of another size than the map's takes the checked path.
+        let small = GrayImage {
+            width: w - 3,
+            height: h - 2,
+            data: img.data[..(w - 3) * (h - 2)].to_vec(),
+        };
+        assert_eq!(map.remap(&small).data, map.remap_checked(&small).data);
     }
 }
