@@ -112,22 +112,18 @@ impl RemapMap {
     /// The map of rectified pixels to raw pixels `map_x`, `map_y` (row-major, `width` x
     /// `height`, raw images of the same size), with its taps worked out.
     fn new(width: usize, height: usize, map_x: Vec<f32>, map_y: Vec<f32>) -> RemapMap {
-        let (sw, sh) = (width as i64, height as i64);
-        let mut taps = Taps::default();
-        for (&mx, &my) in map_x.iter().zip(&map_y) {
-            let (x0f, y0f) = (mx.floor(), my.floor());
-            let (x0, y0) = (x0f as i64, y0f as i64);
-            let (index, ax, ay) = if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
-                (0, 0.0, 0.0)
+        let taps = {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: `Taps::of_avx2` only enables AVX2 code generation for safe code
+                // (floor inlined as one instruction); the CPU has AVX2 (checked above).
+                unsafe { Taps::of_avx2(width, height, &map_x, &map_y) }
             } else {
-                // The framed image is (width + 2) wide, raw (0, 0) at framed (1, 1).
-                let framed = (y0 + 1) * (sw + 2) + (x0 + 1);
-                (framed as u32, mx - x0f, my - y0f)
-            };
-            taps.index.push(index);
-            taps.ax.push(ax);
-            taps.ay.push(ay);
-        }
+                Taps::of(width, height, &map_x, &map_y)
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            Taps::of(width, height, &map_x, &map_y)
+        };
         RemapMap {
             width,
             height,
@@ -209,6 +205,42 @@ impl RemapMap {
         let top = px(x0, y0) * (1.0 - ax) + px(x0 + 1, y0) * ax;
         let bottom = px(x0, y0 + 1) * (1.0 - ax) + px(x0 + 1, y0 + 1) * ax;
         grey_of(top * (1.0 - ay) + bottom * ay)
+    }
+}
+
+impl Taps {
+    /// The taps of the map `map_x`, `map_y` of a `width` x `height` raw image.
+    #[inline(always)]
+    fn of(width: usize, height: usize, map_x: &[f32], map_y: &[f32]) -> Taps {
+        let (sw, sh) = (width as i64, height as i64);
+        let n = map_x.len();
+        let mut taps = Taps {
+            index: Vec::with_capacity(n),
+            ax: Vec::with_capacity(n),
+            ay: Vec::with_capacity(n),
+        };
+        for (&mx, &my) in map_x.iter().zip(map_y) {
+            let (x0f, y0f) = (mx.floor(), my.floor());
+            let (x0, y0) = (x0f as i64, y0f as i64);
+            let (index, ax, ay) = if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
+                (0, 0.0, 0.0)
+            } else {
+                // The framed image is (width + 2) wide, raw (0, 0) at framed (1, 1).
+                let framed = (y0 + 1) * (sw + 2) + (x0 + 1);
+                (framed as u32, mx - x0f, my - y0f)
+            };
+            taps.index.push(index);
+            taps.ax.push(ax);
+            taps.ay.push(ay);
+        }
+        taps
+    }
+
+    /// [`Taps::of`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn of_avx2(width: usize, height: usize, map_x: &[f32], map_y: &[f32]) -> Taps {
+        Taps::of(width, height, map_x, map_y)
     }
 }
 
