@@ -106,6 +106,8 @@ struct Taps {
     ax: Vec<f32>,
     /// Weight of the lower taps.
     ay: Vec<f32>,
+    /// The largest of `index`: the gathers' reach.
+    last: usize,
 }
 
 impl RemapMap {
@@ -166,7 +168,8 @@ impl RemapMap {
             unsafe { resample_avx2(&self.taps, &framed, fw, &mut out.data) };
             return out;
         }
-        resample(&self.taps, &framed, fw, &mut out.data);
+        let t = &self.taps;
+        resample((&t.index, &t.ax, &t.ay), &framed, fw, &mut out.data);
         out
     }
 
@@ -184,27 +187,9 @@ impl RemapMap {
             if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
                 continue;
             }
-            *o = self.resample_checked(src, mx, my);
+            *o = resample_checked(src, mx, my);
         }
         out
-    }
-
-    /// The bilinear sample of `src` at raw pixel (mx, my), taps outside the image black.
-    fn resample_checked(&self, src: &GrayImage, mx: f32, my: f32) -> u8 {
-        let (sw, sh) = (src.width as i64, src.height as i64);
-        let (x0f, y0f) = (mx.floor(), my.floor());
-        let (x0, y0) = (x0f as i64, y0f as i64);
-        let (ax, ay) = (mx - x0f, my - y0f);
-        let px = |x: i64, y: i64| -> f32 {
-            if x < 0 || y < 0 || x >= sw || y >= sh {
-                0.0
-            } else {
-                src.data[(y * sw + x) as usize] as f32
-            }
-        };
-        let top = px(x0, y0) * (1.0 - ax) + px(x0 + 1, y0) * ax;
-        let bottom = px(x0, y0 + 1) * (1.0 - ax) + px(x0 + 1, y0 + 1) * ax;
-        grey_of(top * (1.0 - ay) + bottom * ay)
     }
 }
 
@@ -218,6 +203,7 @@ impl Taps {
             index: Vec::with_capacity(n),
             ax: Vec::with_capacity(n),
             ay: Vec::with_capacity(n),
+            last: 0,
         };
         for (&mx, &my) in map_x.iter().zip(map_y) {
             let (x0f, y0f) = (mx.floor(), my.floor());
@@ -229,6 +215,7 @@ impl Taps {
                 let framed = (y0 + 1) * (sw + 2) + (x0 + 1);
                 (framed as u32, mx - x0f, my - y0f)
             };
+            taps.last = taps.last.max(index as usize);
             taps.index.push(index);
             taps.ax.push(ax);
             taps.ay.push(ay);
@@ -246,8 +233,8 @@ impl Taps {
 
 /// Resamples the framed raw image (`fw` wide) at every pixel's taps into `out`.
 #[inline(always)]
-fn resample(t: &Taps, framed: &[u8], fw: usize, out: &mut [u8]) {
-    for (((o, &k), &ax), &ay) in out.iter_mut().zip(&t.index).zip(&t.ax).zip(&t.ay) {
+fn resample((index, ax, ay): (&[u32], &[f32], &[f32]), framed: &[u8], fw: usize, out: &mut [u8]) {
+    for (((o, &k), &ax), &ay) in out.iter_mut().zip(index).zip(ax).zip(ay) {
         let k = k as usize;
         let top = framed[k] as f32 * (1.0 - ax) + framed[k + 1] as f32 * ax;
         let bottom = framed[k + fw] as f32 * (1.0 - ax) + framed[k + fw + 1] as f32 * ax;
@@ -267,7 +254,7 @@ const FRAME_SLACK: usize = 3;
 fn resample_avx2(t: &Taps, framed: &[u8], fw: usize, out: &mut [u8]) {
     use std::arch::x86_64::*;
     let n = out.len();
-    let last = t.index.iter().copied().max().unwrap_or(0) as usize;
+    let last = t.last;
     assert!(
         t.index.len() == n && t.ax.len() == n && t.ay.len() == n,
         "one tap per pixel"
@@ -327,12 +314,26 @@ fn resample_avx2(t: &Taps, framed: &[u8], fw: usize, out: &mut [u8]) {
             }
         }
     }
-    let tail = Taps {
-        index: t.index[lanes..].to_vec(),
-        ax: t.ax[lanes..].to_vec(),
-        ay: t.ay[lanes..].to_vec(),
+    let tail = (&t.index[lanes..], &t.ax[lanes..], &t.ay[lanes..]);
+    resample(tail, framed, fw, &mut out[lanes..]);
+}
+
+/// The bilinear sample of `src` at raw pixel (mx, my), taps outside the image black.
+fn resample_checked(src: &GrayImage, mx: f32, my: f32) -> u8 {
+    let (sw, sh) = (src.width as i64, src.height as i64);
+    let (x0f, y0f) = (mx.floor(), my.floor());
+    let (x0, y0) = (x0f as i64, y0f as i64);
+    let (ax, ay) = (mx - x0f, my - y0f);
+    let px = |x: i64, y: i64| -> f32 {
+        if x < 0 || y < 0 || x >= sw || y >= sh {
+            0.0
+        } else {
+            src.data[(y * sw + x) as usize] as f32
+        }
     };
-    resample(&tail, framed, fw, &mut out[lanes..]);
+    let top = px(x0, y0) * (1.0 - ax) + px(x0 + 1, y0) * ax;
+    let bottom = px(x0, y0 + 1) * (1.0 - ax) + px(x0 + 1, y0 + 1) * ax;
+    grey_of(top * (1.0 - ay) + bottom * ay)
 }
 
 /// A resampled value rounded to a grey level.
