@@ -151,15 +151,7 @@ impl RemapMap {
         if !fits || (w + 2) * (h + 2) > u32::MAX as usize {
             return self.remap_checked(src);
         }
-        let fw = w + 2;
-        // FRAME_SLACK bytes past the frame: the AVX2 path reads each tap pair as 4 bytes.
-        let mut framed = vec![0u8; fw * (h + 2) + FRAME_SLACK];
-        for (row, raw) in framed[fw..]
-            .chunks_exact_mut(fw)
-            .zip(src.data.chunks_exact(w))
-        {
-            row[1..=w].copy_from_slice(raw);
-        }
+        let (fw, framed) = (w + 2, framed(src));
         let mut out = GrayImage::new(w, h);
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
@@ -229,6 +221,21 @@ impl Taps {
     fn of_avx2(width: usize, height: usize, map_x: &[f32], map_y: &[f32]) -> Taps {
         Taps::of(width, height, map_x, map_y)
     }
+}
+
+/// `src` framed by one black pixel on every side ((width + 2) x (height + 2), raw (0, 0) at
+/// (1, 1)), with [`FRAME_SLACK`] bytes after it: the image the taps index (the AVX2 path reads
+/// each tap pair as 4 bytes).
+fn framed(src: &GrayImage) -> Vec<u8> {
+    let (w, h, fw) = (src.width, src.height, src.width + 2);
+    let mut framed = vec![0u8; fw * (h + 2) + FRAME_SLACK];
+    for (row, raw) in framed[fw..]
+        .chunks_exact_mut(fw)
+        .zip(src.data.chunks_exact(w))
+    {
+        row[1..=w].copy_from_slice(raw);
+    }
+    framed
 }
 
 /// Resamples the framed raw image (`fw` wide) at every pixel's taps into `out`.
@@ -826,7 +833,18 @@ mod tests {
             data: (0..w * h).map(|_| next() as u8).collect(),
         };
         let fast = map.remap(&img);
-        assert_eq!(fast.data, map.remap_checked(&img).data);
+        let checked = map.remap_checked(&img).data;
+        assert_eq!(fast.data, checked);
+        // The portable path too (what a CPU without AVX2 runs).
+        let mut portable = vec![0u8; w * h];
+        let t = &map.taps;
+        resample(
+            (&t.index, &t.ax, &t.ay),
+            &framed(&img),
+            w + 2,
+            &mut portable,
+        );
+        assert_eq!(portable, checked);
         assert!(fast.data.iter().filter(|&&v| v != 0).count() > inside / 2);
         // A raw image of another size than the map's takes the checked path.
         let small = GrayImage {
