@@ -65,9 +65,9 @@ impl FeatureGrid {
         grid
     }
 
-    /// Keypoints in cell `c` (row-major), ascending.
-    fn cell(&self, c: usize) -> &[u32] {
-        &self.indices[self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
+    /// Keypoints in cells `first..=last` (row-major), cell by cell, each cell's ascending.
+    fn cells(&self, first: usize, last: usize) -> &[u32] {
+        &self.indices[self.cell_start[first] as usize..self.cell_start[last + 1] as usize]
     }
 
     /// Heap bytes held by the grid.
@@ -213,18 +213,18 @@ impl Features {
         let check_levels = min_level > 0 || max_level >= 0;
         let mut out = Vec::new();
         for cy in y0..=y1 {
-            for cx in x0..=x1 {
-                for &i in g.cell(cy * GRID_COLS + cx) {
-                    let kp = &self.keypoints[i as usize];
-                    if check_levels {
-                        let o = kp.octave as i32;
-                        if o < min_level || (max_level >= 0 && o > max_level) {
-                            continue;
-                        }
+            // Cells x0..=x1 of a row are consecutive, so their keypoints are one run of the
+            // index array (visited in the same order as cell by cell).
+            for &i in g.cells(cy * GRID_COLS + x0, cy * GRID_COLS + x1) {
+                let kp = &self.keypoints[i as usize];
+                if check_levels {
+                    let o = kp.octave as i32;
+                    if o < min_level || (max_level >= 0 && o > max_level) {
+                        continue;
                     }
-                    if (kp.x as f64 - x).abs() < r && (kp.y as f64 - y).abs() < r {
-                        out.push(i as usize);
-                    }
+                }
+                if (kp.x as f64 - x).abs() < r && (kp.y as f64 - y).abs() < r {
+                    out.push(i as usize);
                 }
             }
         }
