@@ -306,15 +306,15 @@ impl PoseProblem<'_> {
         // order as ever.
         let robust = self.robust;
         self.lin.clear();
-        self.lin.extend(self.active.iter().map(|&i| {
+        for &i in &self.active {
             let o = &self.obs[i];
             let p_c = (self.pose * Point3::from(o.point_world)).coords;
             let delta = o.measurement.huber_delta();
             let lin = linearize_observation(self.camera, &o.measurement, o.inv_sigma2, &p_c, |c| {
                 kernel_weight(robust, delta, c)
             });
-            (p_c, lin)
-        }));
+            self.lin.push((p_c, lin));
+        }
         let mut jtj = Matrix6::zeros();
         let mut jtr = Vector6::zeros();
         for (p_c, lin) in &self.lin {
