@@ -98,7 +98,7 @@ pub struct RemapMap {
 /// bounds check, as [`RemapMap::remap`]'s checked path reads them): the framed index of the
 /// top-left tap and the weights of the right and lower taps, exactly as the checked path
 /// derives them. A pixel that maps wholly outside reads the black corner with zero weights.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 struct Taps {
     /// Framed index of each pixel's top-left tap.
     index: Vec<u32>,
@@ -175,11 +175,9 @@ impl RemapMap {
             .iter_mut()
             .zip(self.map_x.iter().zip(self.map_y.iter()))
         {
-            let (x0, y0) = (mx.floor() as i64, my.floor() as i64);
-            if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
-                continue;
+            if let Some(origin) = bilinear_origin(mx, my, sw, sh) {
+                *o = resample_checked(src, origin);
             }
-            *o = resample_checked(src, mx, my);
         }
         out
     }
@@ -198,14 +196,13 @@ impl Taps {
             last: 0,
         };
         for (&mx, &my) in map_x.iter().zip(map_y) {
-            let (x0f, y0f) = (mx.floor(), my.floor());
-            let (x0, y0) = (x0f as i64, y0f as i64);
-            let (index, ax, ay) = if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
-                (0, 0.0, 0.0)
-            } else {
-                // The framed image is (width + 2) wide, raw (0, 0) at framed (1, 1).
-                let framed = (y0 + 1) * (sw + 2) + (x0 + 1);
-                (framed as u32, mx - x0f, my - y0f)
+            let (index, ax, ay) = match bilinear_origin(mx, my, sw, sh) {
+                None => (0, 0.0, 0.0),
+                Some((x0, y0, ax, ay)) => {
+                    // The framed image is (width + 2) wide, raw (0, 0) at framed (1, 1).
+                    let framed = (y0 + 1) * (sw + 2) + (x0 + 1);
+                    (framed as u32, ax, ay)
+                }
             };
             taps.last = taps.last.max(index as usize);
             taps.index.push(index);
@@ -325,12 +322,23 @@ fn resample_avx2(t: &Taps, framed: &[u8], fw: usize, out: &mut [u8]) {
     resample(tail, framed, fw, &mut out[lanes..]);
 }
 
-/// The bilinear sample of `src` at raw pixel (mx, my), taps outside the image black.
-fn resample_checked(src: &GrayImage, mx: f32, my: f32) -> u8 {
-    let (sw, sh) = (src.width as i64, src.height as i64);
+/// Where the bilinear sample at raw pixel (mx, my) of a `sw` x `sh` image starts: its top-left
+/// tap (x0, y0) and the weights (ax, ay) of the right and lower taps; `None` when none of its
+/// taps falls inside the image (the rectified pixel stays black). The one rule the checked
+/// path and the precomputed taps share.
+#[inline(always)]
+fn bilinear_origin(mx: f32, my: f32, sw: i64, sh: i64) -> Option<(i64, i64, f32, f32)> {
     let (x0f, y0f) = (mx.floor(), my.floor());
     let (x0, y0) = (x0f as i64, y0f as i64);
-    let (ax, ay) = (mx - x0f, my - y0f);
+    if x0 < -1 || y0 < -1 || x0 >= sw || y0 >= sh {
+        return None;
+    }
+    Some((x0, y0, mx - x0f, my - y0f))
+}
+
+/// The bilinear sample of `src` from its [`bilinear_origin`], taps outside the image black.
+fn resample_checked(src: &GrayImage, (x0, y0, ax, ay): (i64, i64, f32, f32)) -> u8 {
+    let (sw, sh) = (src.width as i64, src.height as i64);
     let px = |x: i64, y: i64| -> f32 {
         if x < 0 || y < 0 || x >= sw || y >= sh {
             0.0
