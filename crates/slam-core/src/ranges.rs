@@ -10,7 +10,7 @@
 //! (a mistyped 10^12 would never finish). Counts that are thresholds ("at least N inliers")
 //! take any value: an unreachable threshold is a configuration that fails, not one that breaks.
 
-use crate::system::Config;
+use crate::system::{BaselineRole, ClusterViews, Config, Sightings};
 use std::fmt;
 
 /// A configuration value outside its valid range.
@@ -218,10 +218,36 @@ impl Config {
                 1,
                 u64::from(u32::MAX),
             );
+            if m.sightings == Sightings::All && m.cluster_views != ClusterViews::EveryFrame {
+                c.fail(
+                    "sightings",
+                    "\"all\"",
+                    "needs cluster_views = \"every-frame\" (a tracked frame's sightings are \
+                     frame views)"
+                        .to_string(),
+                );
+            }
         }
         if let Some(a) = &self.avc {
             c.section("avc");
             c.above_to("baseline", a.baseline, 0.0, 100.0);
+            if let (BaselineRole::Camera, Some(b)) = (a.b_role, self.rgbd_baseline) {
+                if b != a.baseline {
+                    c.fail(
+                        "b_role",
+                        "\"camera\"",
+                        format!(
+                            "b = {} is the camera's baseline, but rgbd_baseline = {b} gives \
+                             another: set one of them",
+                            a.baseline
+                        ),
+                    );
+                }
+            }
+        }
+        if let Some(b) = self.rgbd_baseline {
+            c.section("");
+            c.above_to("rgbd_baseline", b, 0.0, 100.0);
         }
         if let Some(rc) = &self.rc {
             c.section("rc");
@@ -313,6 +339,39 @@ mod tests {
         assert_eq!(
             c.check().unwrap_err().to_string(),
             "mcor.view_stride = 0: must be in 1..=4294967295"
+        );
+    }
+
+    #[test]
+    fn readings_that_contradict_each_other_are_refused() {
+        let c = Config {
+            mcor: Some(McorParams {
+                sightings: Sightings::All,
+                cluster_views: ClusterViews::Keyframes,
+                ..McorParams::default()
+            }),
+            ..Config::default()
+        };
+        let e = c.check().unwrap_err();
+        assert_eq!(e.key, "mcor.sightings");
+        assert!(e.rule.contains("every-frame"), "{e}");
+        let c = Config {
+            avc: Some(AvcParams {
+                b_role: BaselineRole::Camera,
+                baseline: 0.05,
+                ..AvcParams::default()
+            }),
+            rgbd_baseline: Some(0.07),
+            ..Config::default()
+        };
+        assert_eq!(c.check().unwrap_err().key, "avc.b_role");
+        let c = Config {
+            rgbd_baseline: Some(-1.0),
+            ..Config::default()
+        };
+        assert_eq!(
+            c.check().unwrap_err().to_string(),
+            "rgbd_baseline = -1: must be > 0 and <= 100"
         );
     }
 }

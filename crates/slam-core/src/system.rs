@@ -34,8 +34,10 @@ use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
 use crate::optimize::{BaConfig, PoseOptConfig};
 use crate::place::{PlaceRecognition, Vocabulary};
 
-pub use crate::techniques::params::{AvcParams, ClusterViews, McorParams};
-use crate::techniques::FrameView;
+use crate::techniques::frame_sightings;
+pub use crate::techniques::params::{
+    AvcGate, AvcParams, BaselineRole, ClusterViews, McorParams, Scope, Sightings, Verdict,
+};
 pub use crate::techniques::RigidConsensusParams;
 
 /// serde mirror of [`OrbConfig`] (which does not derive serde itself).
@@ -103,6 +105,12 @@ pub struct Config {
     /// mapper (no c1b, at most 3 keyframes waiting), as with ORB-SLAM2's threads. Gives
     /// seeded runs of one sequence ORB-SLAM2's run-to-run spread, reproducibly.
     pub mapping_lag: u32,
+    /// The RGB-D camera's baseline b in metres (ORB-SLAM2's `bf / fx`), replacing the
+    /// sequence camera's: the virtual right coordinate `u - b fx / d` and the close/far depth
+    /// threshold ThDepth x b. `None` (default): the sequence's (TUM: bf 40). What AVC's
+    /// `b_role = "camera"` sets to its b; given alone it moves the baseline's row of the
+    /// paper's Table I. RGB-D only: a stereo rig's baseline is physical and stays.
+    pub rgbd_baseline: Option<f64>,
 }
 
 impl Default for Config {
@@ -121,11 +129,36 @@ impl Default for Config {
             avc: None,
             rc: None,
             mapping_lag: 0,
+            rgbd_baseline: None,
         }
     }
 }
 
 impl Config {
+    /// The RGB-D baseline b this configuration gives the camera (metres), if any:
+    /// [`rgbd_baseline`](Self::rgbd_baseline), else AVC's b under `b_role = "camera"`.
+    pub fn camera_baseline(&self) -> Option<f64> {
+        self.rgbd_baseline.or_else(|| {
+            self.avc
+                .as_ref()
+                .filter(|a| a.b_role == BaselineRole::Camera)
+                .map(|a| a.baseline)
+        })
+    }
+
+    /// The camera a run of this configuration uses on a sequence with camera `camera`: the
+    /// same, except that an RGB-D camera's `bf` is `b fx` when
+    /// [`camera_baseline`](Self::camera_baseline) gives b. Features extracted for such a run
+    /// must be extracted with this camera (or [`System::track_features`] recomputes their
+    /// right coordinates).
+    pub fn run_camera(&self, camera: &Camera) -> Camera {
+        let mut c = camera.clone();
+        if let (Some(b), crate::SensorKind::Rgbd) = (self.camera_baseline(), camera.sensor) {
+            c.bf = b * c.fx;
+        }
+        c
+    }
+
     /// ORB-SLAM2's EuRoC stereo settings (1200 features), otherwise as the default.
     pub fn stereo() -> Self {
         Config {
@@ -253,6 +286,10 @@ pub struct System {
     /// The map changed (beyond tracking's counters and frame views) since the clusters were
     /// last forgotten: a keyframe was made or mapped, a loop closed, a global BA merged.
     map_touched: bool,
+    /// The camera's `bf` when the configuration changed it from the sequence's (an RGB-D
+    /// baseline of [`Config::camera_baseline`]): features handed in were extracted with the
+    /// sequence's camera, so their right coordinates are recomputed with it.
+    rebased_bf: Option<f64>,
 }
 
 /// What local mapping needs of the system (a free function, so that the map and the mapper
@@ -289,6 +326,9 @@ struct PendingKeyFrame {
 impl System {
     /// A system with an empty map.
     pub fn new(camera: Camera, config: Config) -> Self {
+        let run_camera = config.run_camera(&camera);
+        let rebased_bf = (run_camera.bf != camera.bf).then_some(run_camera.bf);
+        let camera = run_camera;
         let extractor = OrbExtractor::new(config.orb.clone());
         let si = extractor.scale_info();
         let levels = ScaleLevels::new(si.n_levels, si.scale_factor);
@@ -314,6 +354,7 @@ impl System {
             pending_gba: None,
             mcor_clusters: RefCell::new(ClusterCache::new()),
             map_touched: true,
+            rebased_bf,
         }
     }
 
@@ -436,6 +477,10 @@ impl System {
     ) -> TrackResult {
         let id = self.frame_count;
         self.frame_count += 1;
+        let features = match self.rebased_bf {
+            Some(bf) => Arc::new(features.with_rgbd_bf(bf)),
+            None => features,
+        };
         let mut cur = TrackedFrame::new(id, timestamp, features);
         let t1 = Instant::now();
         let mut stats = FrameStats {
@@ -694,36 +739,13 @@ impl System {
         cur.drop_outliers();
     }
 
-    /// MC-OR's every-frame cluster reading: the tracked frame's inlier matches with depth join
-    /// their map points' clusters as frame views (a keyframe's own observations are in the
-    /// clusters already).
+    /// MC-OR's every-frame cluster reading: the tracked frame's sightings
+    /// ([`frame_sightings`]) join their map points' clusters as frame views.
     fn store_mcor_views(&mut self, cur: &TrackedFrame) {
         let Some(params) = self.config.mcor.as_ref() else {
             return;
         };
-        if !params.keeps_views_of(cur.id) {
-            return;
-        }
-        let (Some(tcw), Some(reference)) = (cur.tcw, cur.reference_kf) else {
-            return;
-        };
-        let Some(tkw) = self.map.keyframe_pose_any(reference) else {
-            return;
-        };
-        let twc = tcw.inverse();
-        for i in 0..cur.len() {
-            let Some(id) = cur.map_points[i] else {
-                continue;
-            };
-            if cur.outliers[i] {
-                continue;
-            }
-            let Some(pc) = cur.features.unproject_camera(i, &self.camera) else {
-                continue;
-            };
-            let Some(view) = FrameView::placed(cur.id, &twc, reference, &tkw, pc) else {
-                continue;
-            };
+        for (id, view) in frame_sightings(cur, &self.map, &self.camera, params) {
             if let Some(mp) = self.map.map_point_mut(id) {
                 mp.views.push(view);
                 let views = &self.map.map_point_any(id).expect("just pushed").views;
@@ -903,5 +925,105 @@ mod tests {
         let back: Config = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
         assert_eq!(back, c);
         assert_eq!(toml::from_str::<Config>("").unwrap(), Config::default());
+    }
+
+    #[test]
+    fn the_readings_parse_from_toml_and_an_unknown_value_names_the_allowed_ones() {
+        let c: Config = toml::from_str(
+            "[mcor]\nsightings = \"all\"\nverdict = \"consensus\"\nscope = \"tracking+mapping\"\n\
+             [avc]\ngate = \"3dof\"\nb_role = \"camera\"\n",
+        )
+        .unwrap();
+        let m = c.mcor.unwrap();
+        assert_eq!(
+            (m.sightings, m.verdict, m.scope),
+            (Sightings::All, Verdict::Consensus, Scope::TrackingMapping)
+        );
+        let a = c.avc.unwrap();
+        assert_eq!(
+            (a.gate, a.b_role),
+            (AvcGate::ThreeDof, BaselineRole::Camera)
+        );
+        let e = toml::from_str::<Config>("[mcor]\nverdict = \"vote\"\n").unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains("vote") && e.contains("filter") && e.contains("consensus"),
+            "{e}"
+        );
+        let e = toml::from_str::<Config>("[avc]\ngate = \"2dof\"\n").unwrap_err();
+        assert!(e.to_string().contains("4dof"), "{e}");
+    }
+
+    #[test]
+    fn under_the_camera_reading_b_is_the_rgbd_baseline_and_sets_the_close_threshold() {
+        let camera = Camera::tum_fr3();
+        let b = 0.05;
+        let camera_role = Config {
+            avc: Some(AvcParams {
+                baseline: b,
+                b_role: BaselineRole::Camera,
+                ..AvcParams::default()
+            }),
+            ..Config::default()
+        };
+        let run = camera_role.run_camera(&camera);
+        assert_eq!(run.bf, b * camera.fx);
+        assert!((run.close_depth() - camera.th_depth * b).abs() < 1e-12);
+        let system = System::new(camera.clone(), camera_role.clone());
+        assert_eq!(system.camera().close_depth(), run.close_depth());
+        // The residual reading leaves the camera as it is; so does a stereo rig.
+        let residual_role = Config {
+            avc: Some(AvcParams {
+                baseline: b,
+                ..AvcParams::default()
+            }),
+            ..Config::default()
+        };
+        assert_eq!(residual_role.run_camera(&camera), camera);
+        let stereo = Camera::euroc_rectified();
+        assert_eq!(camera_role.run_camera(&stereo), stereo);
+        // The baseline alone (the ORB-SLAM2 row of Table I under this reading).
+        let alone = Config {
+            rgbd_baseline: Some(b),
+            ..Config::default()
+        };
+        assert_eq!(alone.run_camera(&camera), run);
+    }
+
+    #[test]
+    fn features_rebased_to_another_baseline_are_those_extracted_with_it() {
+        let camera = Camera::tum_fr3();
+        let kps: Vec<crate::feature::KeyPoint> = (0..4)
+            .map(|i| crate::feature::KeyPoint {
+                x: 100.0 + 50.0 * i as f32,
+                y: 200.0,
+                octave: 0,
+                angle: 0.0,
+                response: 1.0,
+            })
+            .collect();
+        let depth = vec![1.0f32, 2.5, 0.0, 4.0];
+        let ur_of = |bf: f64| -> Vec<f32> {
+            kps.iter()
+                .zip(&depth)
+                .map(|(k, &d)| {
+                    if d > 0.0 {
+                        (k.x as f64 - bf / d as f64) as f32
+                    } else {
+                        -1.0
+                    }
+                })
+                .collect()
+        };
+        let f = Features::new(
+            kps.clone(),
+            vec![[0; 4]; 4],
+            depth.clone(),
+            ur_of(camera.bf),
+            &camera,
+        );
+        let rebased = f.with_rgbd_bf(0.05 * camera.fx);
+        assert_eq!(rebased.u_right, ur_of(0.05 * camera.fx));
+        assert_eq!(rebased.depth, depth);
     }
 }

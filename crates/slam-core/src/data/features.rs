@@ -154,6 +154,20 @@ impl Features {
         self.keypoints.len()
     }
 
+    /// The RGB-D feature set with every right coordinate that depth gives recomputed for
+    /// baseline `bf` (metres x pixels), as extraction with a camera of that `bf` computes it
+    /// (`u - bf / depth`): what a run whose configuration moves the RGB-D baseline
+    /// ([`crate::system::Config::camera_baseline`]) tracks on features extracted beforehand.
+    pub fn with_rgbd_bf(&self, bf: f64) -> Features {
+        let mut f = self.clone();
+        for ((ur, &d), kp) in f.u_right.iter_mut().zip(&f.depth).zip(&f.keypoints) {
+            if d > 0.0 {
+                *ur = (kp.x as f64 - bf / d as f64) as f32;
+            }
+        }
+        f
+    }
+
     /// Heap bytes held by the feature set (what a sweep keeps per frame).
     pub fn heap_bytes(&self) -> usize {
         self.keypoints.capacity() * std::mem::size_of::<KeyPoint>()

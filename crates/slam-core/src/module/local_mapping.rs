@@ -3,13 +3,13 @@
 //! triangulate new points with neighbours, fuse duplicates, local bundle adjustment, cull
 //! redundant keyframes.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::pose_estimation::{measurement_for, renormalized, NoiseHooks};
+use super::pose_estimation::{map_point_cluster, measurement_for, renormalized, NoiseHooks};
 use crate::camera::Camera;
 use crate::data::{KeyFrameId, Map, MapPointId, ScaleLevels};
 use crate::matching::epipolar::{fundamental_12, search_for_triangulation};
@@ -18,6 +18,9 @@ use crate::optimize::{
     local_bundle_adjustment, BaConfig, BaKeyFrame, BaObservation, BaPoint, BaProblem,
 };
 use crate::solve::triangulate_linear;
+use crate::techniques::{
+    FrameView, McorParams, Scope, Sightings, SightingsJudgement, FRAME_VIEW_SOURCE_BIT,
+};
 
 /// Local-mapping thresholds (ORB-SLAM2 RGB-D / stereo values).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -96,6 +99,11 @@ pub struct MappingReport {
     pub fused_points: usize,
     /// Observations erased by local BA.
     pub ba_outliers: usize,
+    /// Map points MC-OR's CL test culled before local BA (`scope = "tracking+mapping"`).
+    pub mcor_culled_points: usize,
+    /// Keyframe observations MC-OR's FL test kept out of local BA and erased
+    /// (`scope = "tracking+mapping"`).
+    pub mcor_erased_observations: usize,
     /// Keyframes culled as redundant.
     pub culled_keyframes: usize,
     /// Wall time of everything but BA, milliseconds.
@@ -129,7 +137,10 @@ impl LocalMapper {
         let mut ba_ms = 0.0;
         if ctx.params.local_ba && map.keyframe_count() > 2 {
             let tb = Instant::now();
-            report.ba_outliers = local_ba(kf, map, ctx);
+            let erased = local_ba(kf, map, ctx);
+            report.ba_outliers = erased.chi2;
+            report.mcor_culled_points = erased.mcor_culled_points;
+            report.mcor_erased_observations = erased.mcor_observations;
             ba_ms = tb.elapsed().as_secs_f64() * 1e3;
         }
         if ctx.params.keyframe_culling {
@@ -423,11 +434,76 @@ fn search_in_neighbors(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> u
 
 /// Local BA around `kf` (ORB-SLAM2's LocalBundleAdjustment): `kf` and its covisible keyframes
 /// are free (keyframe 0 fixed), the other keyframes seeing their points are fixed. Observations
-/// BA flags are erased from the map. Returns the number erased.
-fn local_ba(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usize {
-    let Some(k) = map.keyframe(kf) else {
-        return 0;
+/// BA flags are erased from the map. Under MC-OR's `scope = "tracking+mapping"` the local
+/// points are judged first ([`mcor_before_local_ba`]). Returns what was erased.
+fn local_ba(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> LocalBaErasures {
+    let mut erasures = LocalBaErasures::default();
+    let Some(mut ba) = local_ba_problem(kf, map, ctx, &mut erasures) else {
+        return erasures;
     };
+    let report = local_bundle_adjustment(ctx.camera, &mut ba.problem, ctx.ba);
+    let keep_sightings = ctx
+        .hooks
+        .mcor
+        .is_some_and(|m| m.sightings == Sightings::All);
+    let erase = |map: &mut Map, mp: MapPointId, o: KeyFrameId| {
+        let good = map.map_point(mp).is_some();
+        if good {
+            if keep_sightings {
+                keep_sighting_as_view(map, mp, o, ctx.camera);
+            }
+            map.erase_observation(mp, o);
+        }
+        good
+    };
+    for (k, &(mp, o)) in ba.obs_ids.iter().enumerate() {
+        if report.outliers[k] && erase(map, mp, o) {
+            erasures.chi2 += 1;
+        }
+    }
+    for &(mp, o) in &ba.mcor_out {
+        if erase(map, mp, o) {
+            erasures.mcor_observations += 1;
+        }
+    }
+    for (&id, &ki) in &ba.kf_index {
+        if !ba.problem.keyframes[ki].fixed {
+            if let Some(k) = map.keyframe_mut(id) {
+                k.tcw = renormalized(&ba.problem.keyframes[ki].tcw);
+            }
+        }
+    }
+    for (pi, &mp) in ba.points.iter().enumerate() {
+        if let Some(m) = map.map_point_mut(mp) {
+            m.position = ba.problem.points[pi].position;
+            map.update_normal_and_depth(mp, ctx.levels);
+        }
+    }
+    erasures
+}
+
+/// The local BA problem around `kf`, and how its entries map back to the map.
+struct LocalBa {
+    problem: BaProblem,
+    /// Each BA observation's map point and keyframe.
+    obs_ids: Vec<(MapPointId, KeyFrameId)>,
+    /// Each keyframe's index in the problem.
+    kf_index: BTreeMap<KeyFrameId, usize>,
+    /// Each BA point's map point.
+    points: Vec<MapPointId>,
+    /// Observations MC-OR kept out of the problem, to be erased.
+    mcor_out: BTreeSet<(MapPointId, KeyFrameId)>,
+}
+
+/// Builds [`local_ba`]'s problem (MC-OR's culling done, counted in `erasures`); `None` when
+/// `kf` is gone or every keyframe is fixed.
+fn local_ba_problem(
+    kf: KeyFrameId,
+    map: &mut Map,
+    ctx: &MappingContext,
+    erasures: &mut LocalBaErasures,
+) -> Option<LocalBa> {
+    let k = map.keyframe(kf)?;
     let mut local: Vec<KeyFrameId> = vec![kf];
     local.extend(k.covisibles());
     let mut kf_index: BTreeMap<KeyFrameId, usize> = BTreeMap::new();
@@ -442,7 +518,7 @@ fn local_ba(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usize {
         }
     }
     let mut points: Vec<MapPointId> = Vec::new();
-    let mut seen = std::collections::BTreeSet::new();
+    let mut seen = BTreeSet::new();
     for &id in &local {
         let Some(k) = map.keyframe(id) else {
             continue;
@@ -453,16 +529,15 @@ fn local_ba(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usize {
             }
         }
     }
+    let mut mcor_out = BTreeSet::new();
+    if let Some(params) = ctx.hooks.mcor.filter(|m| m.scope == Scope::TrackingMapping) {
+        let (kept, out, culled) = mcor_before_local_ba(map, points, ctx.camera, params);
+        (points, mcor_out) = (kept, out);
+        erasures.mcor_culled_points = culled;
+    }
     // Fixed keyframes: observers of local points outside the window.
     for &mp in &points {
-        let obs: Vec<KeyFrameId> = map
-            .map_point(mp)
-            .expect("good")
-            .observations
-            .keys()
-            .copied()
-            .collect();
-        for o in obs {
+        for &o in map.map_point(mp).expect("good").observations.keys() {
             if let std::collections::btree_map::Entry::Vacant(e) = kf_index.entry(o) {
                 if let Some(k) = map.keyframe(o) {
                     e.insert(problem.keyframes.len());
@@ -475,7 +550,7 @@ fn local_ba(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usize {
         }
     }
     if problem.keyframes.iter().all(|k| k.fixed) {
-        return 0;
+        return None;
     }
     let mut obs_ids: Vec<(MapPointId, KeyFrameId)> = Vec::new();
     for (pi, &mp) in points.iter().enumerate() {
@@ -487,6 +562,9 @@ fn local_ba(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usize {
             let Some(&ki) = kf_index.get(&o) else {
                 continue;
             };
+            if mcor_out.contains(&(mp, o)) {
+                continue;
+            }
             let k = map.keyframe(o).expect("indexed keyframes are good");
             problem.observations.push(BaObservation {
                 keyframe: ki,
@@ -503,28 +581,83 @@ fn local_ba(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usize {
             obs_ids.push((mp, o));
         }
     }
-    let report = local_bundle_adjustment(ctx.camera, &mut problem, ctx.ba);
-    let mut erased = 0;
-    for (k, &(mp, o)) in obs_ids.iter().enumerate() {
-        if report.outliers[k] && map.map_point(mp).is_some() {
-            map.erase_observation(mp, o);
-            erased += 1;
-        }
-    }
-    for (&id, &ki) in &kf_index {
-        if !problem.keyframes[ki].fixed {
-            if let Some(k) = map.keyframe_mut(id) {
-                k.tcw = renormalized(&problem.keyframes[ki].tcw);
+    Some(LocalBa {
+        problem,
+        obs_ids,
+        kf_index,
+        points,
+        mcor_out,
+    })
+}
+
+/// What [`local_ba`] erased.
+#[derive(Clone, Copy, Debug, Default)]
+struct LocalBaErasures {
+    /// Observations BA's chi2 test flagged.
+    chi2: usize,
+    /// Points MC-OR's CL test culled.
+    mcor_culled_points: usize,
+    /// Observations MC-OR's FL test kept out.
+    mcor_observations: usize,
+}
+
+/// MC-OR's `scope = "tracking+mapping"` reading before local BA: every local point's cluster
+/// (as tracking builds it) judged by Algorithm 1 over its sightings. A point whose cluster fails
+/// the CL test is culled; a keyframe observation whose feature fails the FL test is returned, to
+/// be kept out of BA and erased after it (a point with no observation left leaves the
+/// problem). Returns the points left, those observations and the number culled.
+fn mcor_before_local_ba(
+    map: &mut Map,
+    points: Vec<MapPointId>,
+    camera: &Camera,
+    params: &McorParams,
+) -> (Vec<MapPointId>, BTreeSet<(MapPointId, KeyFrameId)>, usize) {
+    let mut kept = Vec::with_capacity(points.len());
+    let mut out = BTreeSet::new();
+    let mut culled = 0;
+    for mp in points {
+        let Some(position) = map.map_point(mp).map(|m| m.position) else {
+            continue;
+        };
+        let cluster = map_point_cluster(map, mp, camera, params.cluster_views);
+        match cluster.judge_sightings(params, &position) {
+            SightingsJudgement::Cull => {
+                map.set_map_point_bad(mp);
+                culled += 1;
+            }
+            SightingsJudgement::Keep { rejected } => {
+                let before = out.len();
+                out.extend(
+                    rejected
+                        .into_iter()
+                        .filter(|s| s & FRAME_VIEW_SOURCE_BIT == 0)
+                        .map(|s| (mp, KeyFrameId(s as u32))),
+                );
+                // A point none of whose observations is left is not optimized.
+                let n_obs = map.map_point(mp).map_or(0, |m| m.observations.len());
+                if out.len() - before < n_obs {
+                    kept.push(mp);
+                }
             }
         }
     }
-    for (pi, &mp) in points.iter().enumerate() {
-        if let Some(m) = map.map_point_mut(mp) {
-            m.position = problem.points[pi].position;
-            map.update_normal_and_depth(mp, ctx.levels);
-        }
+    (kept, out, culled)
+}
+
+/// MC-OR's `sightings = "all"` reading: keyframe `kf`'s observation of map point `mp`, about
+/// to be erased, stays in the point's cluster as a frame view of the keyframe's own frame
+/// (carried by the keyframe, so it follows the keyframe's pose). Nothing without depth.
+fn keep_sighting_as_view(map: &mut Map, mp: MapPointId, kf: KeyFrameId, camera: &Camera) {
+    let Some(view) = map.keyframe(kf).and_then(|k| {
+        let idx = *map.map_point(mp)?.observations.get(&kf)?;
+        let pc = k.features.unproject_camera(idx, camera)?;
+        FrameView::new(k.frame_id, &k.tcw, kf, &k.tcw, pc)
+    }) else {
+        return;
+    };
+    if let Some(m) = map.map_point_mut(mp) {
+        m.views.push(view);
     }
-    erased
 }
 
 /// Culls covisible keyframes whose close map points are mostly (> 90 %) seen by at least three
@@ -581,4 +714,104 @@ fn keyframe_culling(kf: KeyFrameId, map: &mut Map, ctx: &MappingContext) -> usiz
         }
     }
     culled
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::module::test_map::scene;
+    use crate::optimize::BaConfig;
+    use std::sync::Arc;
+
+    /// The test map with keyframe 2's depth of point 7 one metre too far and map point 10
+    /// drifted 0.6 m from where its sightings put it; keyframes connected.
+    fn judged_map() -> (Camera, Map, MapPointId, MapPointId) {
+        let (camera, mut map, frame, _) = scene(&[]);
+        let kf2 = KeyFrameId(2);
+        let mut f = (*map.keyframe(kf2).unwrap().features).clone();
+        f.depth[7] += 1.0;
+        f.u_right[7] = (f.keypoints[7].x as f64 - camera.bf / f.depth[7] as f64) as f32;
+        map.keyframe_mut(kf2).unwrap().features = Arc::new(f);
+        let (p7, p10) = (frame.map_points[7].unwrap(), frame.map_points[10].unwrap());
+        map.map_point_mut(p10).unwrap().position += Vector3::new(0.0, 0.6, 0.0);
+        for k in 0..3 {
+            map.update_connections(KeyFrameId(k));
+        }
+        (camera, map, p7, p10)
+    }
+
+    #[test]
+    fn under_the_mapping_scope_local_ba_receives_no_observation_mcor_rejected() {
+        let (camera, map, p7, p10) = judged_map();
+        let levels = ScaleLevels::new(8, 1.2);
+        let (params, ba) = (MappingParams::default(), BaConfig::default());
+        let kf2 = KeyFrameId(2);
+        for scope in [Scope::Tracking, Scope::TrackingMapping] {
+            let mcor = McorParams {
+                scope,
+                ..McorParams::default()
+            };
+            let ctx = MappingContext {
+                camera: &camera,
+                levels: &levels,
+                params: &params,
+                ba: &ba,
+                hooks: NoiseHooks {
+                    mcor: Some(&mcor),
+                    ..NoiseHooks::default()
+                },
+            };
+            let mut m = map.clone();
+            let mut erasures = LocalBaErasures::default();
+            let problem = local_ba_problem(kf2, &mut m, &ctx, &mut erasures).unwrap();
+            let mapping = scope == Scope::TrackingMapping;
+            // The feature that fails MC-OR's FL test is not in the problem; the other
+            // keyframes' sightings of its point are.
+            assert_eq!(!problem.obs_ids.contains(&(p7, kf2)), mapping);
+            assert_eq!(problem.mcor_out.contains(&(p7, kf2)), mapping);
+            assert!(problem.obs_ids.contains(&(p7, KeyFrameId(1))));
+            // The point whose cluster fails the CL test is culled, not optimized.
+            assert_eq!(!problem.points.contains(&p10), mapping);
+            assert_eq!(m.map_point(p10).is_none(), mapping);
+            assert_eq!(erasures.mcor_culled_points, usize::from(mapping));
+            let judged = problem
+                .obs_ids
+                .iter()
+                .all(|o| !problem.mcor_out.contains(o));
+            assert!(judged, "no rejected observation reaches BA");
+        }
+    }
+
+    #[test]
+    fn local_ba_erases_mcor_rejections_and_all_sightings_keep_them_as_views() {
+        let (camera, map, p7, _) = judged_map();
+        let levels = ScaleLevels::new(8, 1.2);
+        let (params, ba) = (MappingParams::default(), BaConfig::default());
+        let kf2 = KeyFrameId(2);
+        for sightings in [Sightings::Inliers, Sightings::All] {
+            let mcor = McorParams {
+                scope: Scope::TrackingMapping,
+                sightings,
+                ..McorParams::default()
+            };
+            let ctx = MappingContext {
+                camera: &camera,
+                levels: &levels,
+                params: &params,
+                ba: &ba,
+                hooks: NoiseHooks {
+                    mcor: Some(&mcor),
+                    ..NoiseHooks::default()
+                },
+            };
+            let mut m = map.clone();
+            let erasures = local_ba(kf2, &mut m, &ctx);
+            assert!(erasures.mcor_observations >= 1, "{erasures:?}");
+            let point = m.map_point(p7).unwrap();
+            assert!(!point.observations.contains_key(&kf2));
+            let frame_of_kf2 = m.keyframe(kf2).unwrap().frame_id;
+            let kept = point.views.views().any(|v| v.frame == frame_of_kf2);
+            assert_eq!(kept, sightings == Sightings::All, "{sightings:?}");
+        }
+    }
 }

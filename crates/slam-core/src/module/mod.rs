@@ -15,4 +15,6 @@ pub mod loop_closing;
 pub mod mcor_clusters;
 pub mod pose_estimation;
 pub mod relocalization;
+#[cfg(test)]
+pub(crate) mod test_map;
 pub mod tracking;

@@ -15,8 +15,11 @@
 //! [`McorCluster`] caps itself at [`crate::techniques::MCOR_CLUSTER_CAPACITY`] features, folding
 //! older ones into the centroid's running sum). Keyframe poses do not change during a pose
 //! optimization, so the clusters are built once per call and only the current frame's feature
-//! moves between rounds. MC-OR gates pose-only optimization only (the paper: it acts "before
-//! every run of the pose optimization block"); local BA keeps ORB-SLAM2's chi2 outlier erasure.
+//! moves between rounds. By default MC-OR gates pose-only optimization only (the paper: it acts
+//! "before every run of the pose optimization block") as a filter before the chi2 test; its
+//! readings (`McorParams::verdict`, `scope`) let its consensus keep a match the chi2 test drops
+//! ([`Admission::Kept`]) and let it judge local BA's observations too
+//! ([`crate::module::local_mapping`]).
 
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -27,10 +30,12 @@ use super::mcor_clusters::ClusterCache;
 use crate::camera::Camera;
 use crate::data::MapPointId;
 use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
-use crate::optimize::{pose_optimization_with, Measurement, PoseObservation, PoseOptConfig};
+use crate::optimize::{
+    pose_optimization_with, Admission, Measurement, PoseObservation, PoseOptConfig,
+};
 use crate::techniques::mcor_prepared::gate_point;
 use crate::techniques::mcor_prepared::GateMemo;
-use crate::techniques::params::{AvcParams, ClusterViews, McorParams};
+use crate::techniques::params::{AvcParams, ClusterViews, McorParams, Verdict};
 use crate::techniques::rigid_consensus::{
     nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
 };
@@ -118,6 +123,7 @@ fn avc_residual_for(
         avc.aim,
         estimate,
     )
+    .map(|r| r.with_gate(avc.gate.chi2()))
 }
 
 /// The measured depth of keypoint `i` when AVC is on and gives it its residual (a measured
@@ -217,6 +223,30 @@ pub fn mcor_frame_gate_with(
     }
     clusters.put_memo(memo);
     (index, outcome)
+}
+
+/// What MC-OR's verdict on a match does in pose-only optimization: a rejected match is
+/// excluded; a kept one is left to the chi2 test (`verdict = "filter"`), or, under `verdict =
+/// "consensus"`, kept whatever its chi2 when its cluster holds at least
+/// `consensus_min_sightings` sightings and the keypoint has depth (`with_depth`) for the
+/// cluster to agree with.
+fn admission(
+    params: &McorParams,
+    verdict: McorVerdict,
+    cluster: &crate::techniques::mcor_prepared::PreparedCluster,
+    with_depth: bool,
+) -> Admission {
+    match verdict {
+        McorVerdict::RejectedCluster | McorVerdict::RejectedFeature => Admission::Excluded,
+        McorVerdict::Kept
+            if params.verdict == Verdict::Consensus
+                && with_depth
+                && cluster.sightings() >= u64::from(params.consensus_min_sightings) =>
+        {
+            Admission::Kept
+        }
+        McorVerdict::Kept => Admission::Free,
+    }
 }
 
 /// The exact bits of a pose (translation, then quaternion), to tell whether two poses are
@@ -460,6 +490,7 @@ pub fn optimize_frame_pose(
                     &estimate,
                 )
                 .expect("avc_depth admits what the residual accepts")
+                .with_gate(params.gate.chi2())
             })
             .collect(),
         None => Arc::new([]),
@@ -553,7 +584,7 @@ pub fn optimize_frame_pose(
         let mut last_verdicts: Option<Vec<McorVerdict>> = None;
         // Hook point 2, before every round with the latest pose: re-aim the virtual cameras,
         // then re-run MC-OR (an observation rejected at a poor early pose may come back).
-        let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [bool]| {
+        let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [Admission]| {
             if aimed_from.get() != Some(pose_bits(pose)) {
                 for (r, &(k, _)) in avc.iter().zip(&avc_at) {
                     r.aim_at(&(pose * Point3::from(obs[k].point_world)).coords);
@@ -562,9 +593,15 @@ pub fn optimize_frame_pose(
             }
             if let Some(out) = veto {
                 if round < rc_veto_rounds {
-                    excluded.copy_from_slice(out);
+                    for (a, &o) in excluded.iter_mut().zip(out) {
+                        *a = if o {
+                            Admission::Excluded
+                        } else {
+                            Admission::Free
+                        };
+                    }
                 } else {
-                    excluded.fill(false);
+                    excluded.fill(Admission::Free);
                 }
             }
             if let Some(params) = hooks.mcor {
@@ -585,7 +622,7 @@ pub fn optimize_frame_pose(
                         McorVerdict::RejectedFeature => last_gate.1 += 1,
                         McorVerdict::Kept => {}
                     }
-                    *e = verdict != McorVerdict::Kept;
+                    *e = admission(params, verdict, shared.cluster(id), p.is_some());
                     if tapped {
                         verdicts.push(verdict);
                     }
@@ -666,102 +703,12 @@ pub fn optimize_frame_pose(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::feature::KeyPoint;
+    use crate::data::KeyFrameId;
+    use crate::module::test_map::{scene, scene_with, shifted, twc};
+    use crate::techniques::{frame_sightings, AvcGate, Sightings, FRAME_VIEW_SOURCE_BIT};
     use crate::techniques::{mcor_gate, FrameView, McorMatch, McorVerdict};
-    use nalgebra::{Translation3, UnitQuaternion};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-
-    /// Camera-to-world pose of camera `k`: 10 cm steps along x, looking along +z.
-    fn twc(k: usize) -> Isometry3<f64> {
-        Isometry3::from_parts(
-            Translation3::new(0.1 * k as f64, 0.0, 0.0),
-            UnitQuaternion::from_euler_angles(0.0, 0.02 * k as f64, 0.0),
-        )
-    }
-
-    /// Features of `points` (world) seen from `twc`, with `depth_error(k)` metres added to the
-    /// depth of point `k` and `pixel_noise` px of uniform keypoint noise.
-    fn features(
-        camera: &Camera,
-        points: &[Vector3<f64>],
-        twc: &Isometry3<f64>,
-        depth_error: impl Fn(usize) -> f64,
-        pixel_noise: f64,
-        rng: &mut ChaCha8Rng,
-    ) -> Arc<Features> {
-        let (mut kps, mut depth, mut ur) = (Vec::new(), Vec::new(), Vec::new());
-        for (k, pw) in points.iter().enumerate() {
-            let p = twc.inverse_transform_point(&Point3::from(*pw)).coords;
-            let uv = camera.project(&p);
-            let (u, v) = (
-                uv.x + rng.random_range(-pixel_noise..=pixel_noise),
-                uv.y + rng.random_range(-pixel_noise..=pixel_noise),
-            );
-            let z = p.z + depth_error(k);
-            kps.push(KeyPoint {
-                x: u as f32,
-                y: v as f32,
-                octave: 0,
-                angle: 0.0,
-                response: 1.0,
-            });
-            depth.push(z as f32);
-            ur.push((u - camera.bf / z) as f32);
-        }
-        let n = points.len();
-        Arc::new(Features::new(
-            kps,
-            (0..n).map(|i| [i as u64, 0, 0, 0]).collect(),
-            depth,
-            ur,
-            camera,
-        ))
-    }
-
-    /// A map of 3 keyframes observing 120 points, and the current frame (camera 3) matched to
-    /// all of them; points `gross` have a depth reading 1.5 m too far in the current frame.
-    fn scene(gross: &[usize]) -> (Camera, Map, TrackedFrame, Vec<Vector3<f64>>) {
-        let gross = gross.to_vec();
-        scene_with(move |k| if gross.contains(&k) { 1.5 } else { 0.0 })
-    }
-
-    /// [`scene`] with `depth_error(k)` metres on the current frame's depth of point `k`.
-    fn scene_with(
-        depth_error: impl Fn(usize) -> f64,
-    ) -> (Camera, Map, TrackedFrame, Vec<Vector3<f64>>) {
-        let camera = Camera::tum_fr3();
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let points: Vec<Vector3<f64>> = (0..120)
-            .map(|_| {
-                let p = camera.unproject(
-                    rng.random_range(40.0..600.0),
-                    rng.random_range(40.0..440.0),
-                    rng.random_range(1.5..4.0),
-                );
-                twc(1) * p
-            })
-            .collect();
-        let mut map = Map::new();
-        let kfs: Vec<_> = (0..3)
-            .map(|k| {
-                let f = features(&camera, &points, &twc(k), |_| 0.0, 0.3, &mut rng);
-                map.create_keyframe(k as u64, k as f64, twc(k).inverse(), f)
-            })
-            .collect();
-        for (i, p) in points.iter().enumerate() {
-            let mp = map.create_map_point(*p, [i as u64, 0, 0, 0], kfs[0]);
-            for &kf in &kfs {
-                map.add_observation(mp, kf, i);
-            }
-        }
-        let f = features(&camera, &points, &twc(3), depth_error, 0.3, &mut rng);
-        let mut frame = TrackedFrame::new(3, 3.0, f);
-        for i in 0..points.len() {
-            frame.map_points[i] = map.map_points().nth(i).map(|m| m.id);
-        }
-        (camera, map, frame, points)
-    }
 
     fn start_pose() -> Isometry3<f64> {
         (Isometry3::translation(0.02, -0.01, 0.015) * twc(3)).inverse()
@@ -879,6 +826,7 @@ mod tests {
                         tau_gf: tau,
                         tau_mg: tau * 0.7,
                         view_stride: 1,
+                        ..McorParams::default()
                     };
                     let tcw = twc(3).inverse();
                     let (index, outcome) =
@@ -1166,5 +1114,120 @@ mod tests {
         });
         assert!(records[0].matches.iter().all(|m| m.mcor.is_none()));
         assert!(!tap_active());
+    }
+
+    /// The raw chi2 of keypoint `k`'s baseline residual at `tcw` (octave 0: unit weight).
+    fn baseline_chi2(frame: &TrackedFrame, map: &Map, camera: &Camera, k: usize) -> f64 {
+        let mp = map.map_point(frame.map_points[k].unwrap()).unwrap();
+        let p_c = (frame.tcw.unwrap() * Point3::from(mp.position)).coords;
+        let block = builtin_measurement(&frame.features, k)
+            .evaluate(camera, &p_c)
+            .unwrap();
+        block.residual.norm_squared()
+    }
+
+    #[test]
+    fn consensus_keeps_a_match_whose_cluster_agrees_although_its_chi2_exceeds_the_gate() {
+        let (camera, map, frame, _) = scene(&[]);
+        // 12 px off along the row: a reprojection error far above the gate, a back-projection
+        // a few centimetres from the map point (well inside MC-OR's 0.7 m).
+        let moved = [5, 9];
+        let frame = shifted(&frame, &camera, &moved, 12.0);
+        let filter = McorParams::default();
+        let consensus = McorParams {
+            verdict: Verdict::Consensus,
+            ..McorParams::default()
+        };
+        // The scene's clusters hold three keyframe sightings: one more than a young cluster.
+        let young = McorParams {
+            consensus_min_sightings: 4,
+            ..consensus.clone()
+        };
+        for (params, kept) in [(&filter, false), (&consensus, true), (&young, false)] {
+            let mut f = frame.clone();
+            let hooks = NoiseHooks {
+                mcor: Some(params),
+                ..NoiseHooks::default()
+            };
+            let counts = optimize_from_start(&mut f, &map, &camera, &hooks);
+            assert!(error_m(&f.tcw.unwrap()) < 0.01, "{params:?}");
+            for &k in &moved {
+                let chi2 = baseline_chi2(&f, &map, &camera, k);
+                assert!(chi2 > 7.815, "match {k}: chi2 {chi2}");
+                assert_eq!(!f.outliers[k], kept, "match {k} under {params:?}");
+            }
+            assert_eq!(counts.n_mcor_rejected_features, 0);
+        }
+    }
+
+    #[test]
+    fn all_sightings_put_a_sighting_the_chi2_test_rejected_in_its_cluster() {
+        let (camera, map, frame, _) = scene(&[]);
+        let mut f = shifted(&frame, &camera, &[7], 12.0);
+        let filter = McorParams::default();
+        let hooks = NoiseHooks {
+            mcor: Some(&filter),
+            ..NoiseHooks::default()
+        };
+        optimize_from_start(&mut f, &map, &camera, &hooks);
+        assert!(f.outliers[7], "the shifted match is a chi2 outlier");
+        assert!(!f.outliers[8]);
+        f.reference_kf = Some(KeyFrameId(2));
+        let source = FRAME_VIEW_SOURCE_BIT | f.id;
+        for (sightings, outlier_joins) in [(Sightings::Inliers, false), (Sightings::All, true)] {
+            let params = McorParams {
+                sightings,
+                ..McorParams::default()
+            };
+            let mut m = map.clone();
+            for (id, view) in frame_sightings(&f, &m, &camera, &params) {
+                m.map_point_mut(id).unwrap().views.push(view);
+            }
+            let holds = |k: usize| {
+                map_point_cluster(&m, f.map_points[k].unwrap(), &camera, params.cluster_views)
+                    .features()
+                    .any(|c| c.source() == source)
+            };
+            assert_eq!(holds(7), outlier_joins, "{sightings:?}");
+            assert!(holds(8), "an inlier's sighting joins under {sightings:?}");
+        }
+    }
+
+    #[test]
+    fn the_three_dof_gate_reading_gates_avc_at_orb_slam2s_stereo_gate() {
+        let (camera, map, frame, points) = scene(&[]);
+        let estimate = (start_pose() * Point3::from(points[0])).coords;
+        for (gate, chi2) in [(AvcGate::FourDof, 9.488), (AvcGate::ThreeDof, 7.815)] {
+            let avc = AvcParams {
+                gate,
+                ..AvcParams::default()
+            };
+            let hooks = NoiseHooks {
+                avc: Some(&avc),
+                ..NoiseHooks::default()
+            };
+            let m = measurement_for(&camera, &frame.features, 0, &hooks, &estimate);
+            assert_eq!(m.dof(), 4);
+            assert_eq!(m.chi2_threshold(), chi2);
+            assert_eq!(m.huber_delta(), chi2.sqrt());
+            // The pose optimization classifies by that gate: under the tap, every match's
+            // inlier flag is its AVC chi2 against it.
+            let mut f = frame.clone();
+            let (_, records) = tap_pose_optimizations(|| {
+                optimize_from_start(&mut f, &map, &camera, &hooks);
+            });
+            let record = records.last().unwrap();
+            let tcw = record.tcw;
+            for r in &record.matches {
+                let p_c = (tcw * Point3::from(r.point_world)).coords;
+                let m = measurement_for(&camera, &f.features, r.keypoint, &hooks, &p_c);
+                let c = m.evaluate(&camera, &p_c).unwrap().residual.norm_squared();
+                // Aimed from the final pose rather than the last round's start: equal away
+                // from the gate.
+                if (c - chi2).abs() > 0.5 {
+                    assert_eq!(r.inlier, c <= chi2, "chi2 {c} against {chi2}");
+                }
+            }
+        }
     }
 }

@@ -32,8 +32,8 @@ pub use local_ba::{
 };
 pub use pose_graph::{optimize_pose_graph, PoseGraph, PoseGraphEdge, PoseGraphReport};
 pub use pose_only::{
-    pose_optimization, pose_optimization_with, BetweenRounds, PoseObservation, PoseOptConfig,
-    PoseOptResult,
+    pose_optimization, pose_optimization_with, Admission, BetweenRounds, PoseObservation,
+    PoseOptConfig, PoseOptResult,
 };
 pub use residual::Measurement;
 pub use robust::Huber;

@@ -65,8 +65,22 @@ pub struct PoseOptResult {
     pub chi2: Vec<f64>,
 }
 
-/// The hook of [`pose_optimization_with`]: `(round, current pose, excluded mask)`.
-pub type BetweenRounds<'a> = dyn FnMut(usize, &Isometry3<f64>, &mut [bool]) + 'a;
+/// What the caller's hook decided for one observation before a round of
+/// [`pose_optimization_with`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Admission {
+    /// The chi2 test decides (ORB-SLAM2's rule). The default.
+    #[default]
+    Free,
+    /// Out of the round, and an outlier until the hook frees it.
+    Excluded,
+    /// In the round and an inlier whatever its chi2 (while its point is in front of the
+    /// camera): MC-OR's consensus verdict, which keeps a match the chi2 test would drop.
+    Kept,
+}
+
+/// The hook of [`pose_optimization_with`]: `(round, current pose, admission per observation)`.
+pub type BetweenRounds<'a> = dyn FnMut(usize, &Isometry3<f64>, &mut [Admission]) + 'a;
 
 /// Below this many usable observations nothing is optimized (ORB-SLAM2: 3).
 const MIN_CORRESPONDENCES: usize = 3;
@@ -88,11 +102,12 @@ pub fn pose_optimization(
 /// iterations, classifying observations by chi2 after every round: an observation above its
 /// gate (5.991 / 7.815 / 9.488) leaves the next round but is re-tested after it.
 ///
-/// `between_rounds(round, pose, excluded)` runs before every round (also before round 0, with
-/// the initial pose; later with the latest estimate). It may set or clear entries of
-/// `excluded` (one per observation, initially all `false`): excluded observations stay out of
-/// the optimization and are reported as outliers until cleared. This is the hook for the
-/// paper's MC-OR, which re-gates observations as the pose moves.
+/// `between_rounds(round, pose, admission)` runs before every round (also before round 0, with
+/// the initial pose; later with the latest estimate). It may set entries of `admission` (one
+/// per observation, initially all [`Admission::Free`]): excluded observations stay out of the
+/// optimization and are reported as outliers until freed; kept ones stay in every round and
+/// are inliers whatever their chi2. This is the hook for the paper's MC-OR, which re-gates
+/// observations as the pose moves.
 ///
 /// With fewer than 3 usable observations the initial pose is returned unchanged.
 pub fn pose_optimization_with(
@@ -103,7 +118,7 @@ pub fn pose_optimization_with(
     between_rounds: &mut BetweenRounds<'_>,
 ) -> PoseOptResult {
     let n = obs.len();
-    let mut excluded = vec![false; n];
+    let mut admission = vec![Admission::Free; n];
     let mut outlier = vec![false; n];
     let mut pose = *initial_tcw;
     // Which observations are defined at the round's start pose (a residual's definedness
@@ -119,7 +134,7 @@ pub fn pose_optimization_with(
     // before).
     let mut chi2_at_pose: Vec<Option<f64>> = Vec::with_capacity(n);
     for round in 0..cfg.rounds {
-        between_rounds(round, &pose, &mut excluded);
+        between_rounds(round, &pose, &mut admission);
         let (start, defined) = if cfg.restart_each_round {
             let defined = defined_at_initial.get_or_insert_with(|| defined_at(initial_tcw));
             (*initial_tcw, std::borrow::Cow::Borrowed(defined.as_slice()))
@@ -127,9 +142,19 @@ pub fn pose_optimization_with(
             (pose, std::borrow::Cow::Owned(defined_at(&pose)))
         };
         let active: Vec<usize> = (0..n)
-            .filter(|&i| !outlier[i] && !excluded[i] && defined[i])
+            .filter(|&i| {
+                defined[i]
+                    && match admission[i] {
+                        Admission::Free => !outlier[i],
+                        Admission::Excluded => false,
+                        Admission::Kept => true,
+                    }
+            })
             .collect();
-        let candidates = excluded.iter().filter(|&&e| !e).count();
+        let candidates = admission
+            .iter()
+            .filter(|&&a| a != Admission::Excluded)
+            .count();
         if round == 0 && active.len() < MIN_CORRESPONDENCES {
             break;
         }
@@ -157,7 +182,11 @@ pub fn pose_optimization_with(
             .collect()
     };
     let inliers: Vec<bool> = (0..n)
-        .map(|i| !excluded[i] && chi2[i] <= obs[i].measurement.chi2_threshold())
+        .map(|i| match admission[i] {
+            Admission::Free => chi2[i] <= obs[i].measurement.chi2_threshold(),
+            Admission::Excluded => false,
+            Admission::Kept => chi2[i].is_finite(),
+        })
         .collect();
     let n_inliers = inliers.iter().filter(|&&b| b).count();
     PoseOptResult {
@@ -512,7 +541,9 @@ mod tests {
             &mut |round, pose, excluded| {
                 seen.push((round, pose_error(pose, &true_pose()).0));
                 if round == 1 {
-                    excluded[..10].iter_mut().for_each(|e| *e = true);
+                    excluded[..10]
+                        .iter_mut()
+                        .for_each(|e| *e = Admission::Excluded);
                 }
             },
         );

@@ -67,9 +67,13 @@ impl Measurement {
         }
     }
 
-    /// The 95 % chi2 gate for this residual's dimension (5.991 / 7.815 / 9.488).
+    /// The 95 % chi2 gate for this residual's dimension (5.991 / 7.815 / 9.488); an AVC
+    /// residual's own gate (9.488 unless AVC's `gate` reading set 7.815).
     pub fn chi2_threshold(&self) -> f64 {
-        chi2_95(self.dof())
+        match self {
+            Measurement::VirtualCamera(c) => c.chi2_gate(),
+            _ => chi2_95(self.dof()),
+        }
     }
 
     /// The Huber threshold on the whitened residual norm, `sqrt(chi2_threshold())`.

@@ -108,6 +108,9 @@ pub struct VirtualCameraResidual {
     aim: AvcAim,
     /// Virtual camera baseline b, metres.
     baseline: f64,
+    /// The chi2 gate (and, square-rooted, the Huber threshold) of this residual: chi2(4 dof)
+    /// = 9.488 unless [`with_gate`](Self::with_gate) set another (AVC's `gate` reading).
+    gate: f64,
     /// The virtual camera centre (t_x, t_y) = b (cos a, sin a), a = `atan2` of the chosen
     /// direction, as f64 bits; atomic so the direction can be re-chosen between rounds through a
     /// shared `Arc`. Kept as the centre rather than the angle: the residual is evaluated some
@@ -154,6 +157,7 @@ impl VirtualCameraResidual {
             inv_range: 1.0 / measured_point.norm(),
             aim,
             baseline,
+            gate: super::chi2_95(4),
             centre_bits: [AtomicU64::new(0), AtomicU64::new(0)],
         };
         residual.aim_at(estimate);
@@ -164,6 +168,18 @@ impl VirtualCameraResidual {
     /// both finite and positive. [`with_aim_from`](Self::with_aim_from) builds one exactly then.
     pub fn is_defined(depth: f64, baseline: f64) -> bool {
         depth > 0.0 && depth.is_finite() && baseline > 0.0 && baseline.is_finite()
+    }
+
+    /// The residual gated at chi2 `gate` instead of chi2(4 dof) (AVC's `gate` reading: 7.815,
+    /// ORB-SLAM2's stereo gate); the Huber threshold follows, as ORB-SLAM2 ties the two.
+    pub fn with_gate(mut self, gate: f64) -> Self {
+        self.gate = gate;
+        self
+    }
+
+    /// The chi2 gate of this residual (9.488 unless [`with_gate`](Self::with_gate) set another).
+    pub fn chi2_gate(&self) -> f64 {
+        self.gate
     }
 
     /// The residual placing its virtual camera by `aim` (re-aimed from `estimate`).

@@ -33,8 +33,9 @@
 //!   single edge, the current frame's keypoint, so Algorithm 1's `selected_features` reduces to:
 //!   the match is kept iff its cluster passes the CL test and X_cur passes the FL test.
 //!   [`McorCluster::select`] runs Algorithm 1 over all features of a cluster, which is what
-//!   gating bundle-adjustment observations would need; the system does not gate local BA (it
-//!   keeps ORB-SLAM2's chi2 erasure there, see [`crate::module::pose_estimation`]).
+//!   gating bundle-adjustment observations needs: by default the system does not gate local BA
+//!   (it keeps ORB-SLAM2's chi2 erasure there); under `scope = "tracking+mapping"` local mapping
+//!   applies [`McorCluster::judge_sightings`] to every local point before BA.
 //! - **Matches without depth.** A keypoint without measured depth has no 3-D feature: it is not
 //!   FL-tested, but it is still subject to its landmark's CL test (the paper: when the CL metrics
 //!   are high "the landmark is bad to consider as an interest point"), computed over the cluster
@@ -338,6 +339,49 @@ impl McorCluster {
             features: self.recent.iter().map(pass).collect(),
             current: current.map(pass),
         })
+    }
+}
+
+/// What local mapping does with a map point under MC-OR's `scope = "tracking+mapping"`
+/// reading: Algorithm 1 over the point's whole cluster.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SightingsJudgement {
+    /// The cluster failed the CL test: the landmark is culled.
+    Cull,
+    /// The cluster passed (or holds no feature): the sources of the ring features that failed
+    /// the FL test, ascending (a keyframe's id, or a frame view's tagged id).
+    Keep {
+        /// Sources of the rejected features.
+        rejected: Vec<u64>,
+    },
+}
+
+impl McorCluster {
+    /// Algorithm 1 over this cluster's features for map point `map_point` (world), with no
+    /// current frame: what local mapping applies under `scope = "tracking+mapping"`. A feature
+    /// folded out of the ring is not judged alone (it only counts in G).
+    pub fn judge_sightings(
+        &self,
+        params: &McorParams,
+        map_point: &Vector3<f64>,
+    ) -> SightingsJudgement {
+        match self.select(params, map_point, None) {
+            None => SightingsJudgement::Keep {
+                rejected: Vec::new(),
+            },
+            Some(s) if s.cluster_rejected => SightingsJudgement::Cull,
+            Some(s) => {
+                let mut rejected: Vec<u64> = self
+                    .recent
+                    .iter()
+                    .zip(&s.features)
+                    .filter(|(_, &kept)| !kept)
+                    .map(|(f, _)| f.source)
+                    .collect();
+                rejected.sort_unstable();
+                SightingsJudgement::Keep { rejected }
+            }
+        }
     }
 }
 

@@ -112,6 +112,12 @@ impl PreparedCluster {
         }
     }
 
+    /// N of Eq. 1 without the current frame's feature: every sighting the cluster holds or
+    /// folded (sealed).
+    pub fn sightings(&self) -> u64 {
+        self.total
+    }
+
     /// Adds features folded elsewhere whose world positions sum to `sum` (as
     /// `McorCluster::add_folded`); called once, between the keyframe features and the views.
     pub fn add_folded(&mut self, sum: Vector3<f64>, count: u64) {

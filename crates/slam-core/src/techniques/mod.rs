@@ -32,8 +32,10 @@ pub use correlation::{correlation_analysis, error_terms, pearson, CorrelationTab
 pub use mcor::{
     cluster_passes, feature_metrics, feature_passes, mcor_gate, ClusterFeature, ClusterMetrics,
     FeatureMetrics, McorCluster, McorMatch, McorMetrics, McorOutcome, McorSelection, McorVerdict,
-    MCOR_CLUSTER_CAPACITY,
+    SightingsJudgement, MCOR_CLUSTER_CAPACITY,
 };
-pub use mcor_views::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
-pub use params::{AvcAim, AvcParams, ClusterViews, McorParams};
+pub use mcor_views::{frame_sightings, FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
+pub use params::{
+    AvcAim, AvcGate, AvcParams, BaselineRole, ClusterViews, McorParams, Scope, Sightings, Verdict,
+};
 pub use rigid_consensus::{rigid_consensus, Consensus, ConsensusMatch, RigidConsensusParams};
