@@ -178,6 +178,45 @@ pub fn approximations(config: &Config) -> Vec<String> {
     a
 }
 
+/// The readings of the paper (issue 72) `config` sets away from their defaults, as their
+/// config-file settings (`mcor.sightings = "all"`, `avc.gate = "3dof"`, `rgbd_baseline = 0.05`),
+/// sorted; empty: the defaults every earlier result was made with. A sweep folder pins them.
+pub fn readings(config: &Config) -> Vec<String> {
+    let mut r = Vec::new();
+    if let Some(m) = &config.mcor {
+        let d = McorParams::default();
+        if m.sightings != d.sightings {
+            r.push(format!("mcor.sightings = {:?}", m.sightings.name()));
+        }
+        if m.verdict != d.verdict {
+            r.push(format!("mcor.verdict = {:?}", m.verdict.name()));
+        }
+        if m.consensus_min_sightings != d.consensus_min_sightings {
+            r.push(format!(
+                "mcor.consensus_min_sightings = {}",
+                m.consensus_min_sightings
+            ));
+        }
+        if m.scope != d.scope {
+            r.push(format!("mcor.scope = {:?}", m.scope.name()));
+        }
+    }
+    if let Some(a) = &config.avc {
+        let d = AvcParams::default();
+        if a.gate != d.gate {
+            r.push(format!("avc.gate = {:?}", a.gate.name()));
+        }
+        if a.b_role != d.b_role {
+            r.push(format!("avc.b_role = {:?}", a.b_role.name()));
+        }
+    }
+    if let Some(b) = config.rgbd_baseline {
+        r.push(format!("rgbd_baseline = {b}"));
+    }
+    r.sort();
+    r
+}
+
 /// The configuration name of the tables' columns: `orb`, `mcor`, `avc` or `mcor+avc` (MC-OR
 /// with its default, every-frame cluster), or `mcor-keyframes` / `mcor-keyframes+avc` for
 /// MC-OR's keyframe cluster reading.

@@ -16,6 +16,7 @@ mod external;
 mod file_name;
 #[cfg(test)]
 mod fuzz_cli;
+mod readings;
 mod regress;
 mod report;
 mod runner;

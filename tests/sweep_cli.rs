@@ -388,3 +388,83 @@ fn table3_sweeps_every_row_s_twin_under_five_columns() {
         "{err}"
     );
 }
+
+#[test]
+fn readings_stand_side_by_side_as_columns_and_a_folder_pins_its_configs_readings() {
+    let tiny = |out: &Path, configs: &str, extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            "--seq",
+            "kinect",
+            "--configs",
+            configs,
+            "--runs",
+            "1",
+            "--frames",
+            "20",
+            "--baseline",
+            "0.05",
+            "--quiet",
+            "--jobs",
+            "2",
+            "--out",
+        ];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        noisefree(&args)
+    };
+    let dir = tmpdir("readings-columns");
+    assert_ok(&tiny(
+        &dir,
+        "orb,mcor,mcor:sightings=all,mcor:paper,orb:b_role=camera",
+        &[],
+    ));
+    let runs = std::fs::read_to_string(dir.join("runs.csv")).unwrap();
+    for key in [
+        "kinect,mcor:sightings=all,0.7,0.7,0.5,,0,",
+        "kinect,mcor:sightings=all:verdict=consensus:scope=tracking+mapping,0.7,0.7,0.5,,0,",
+        // b as the baseline's camera baseline: the --baseline values apply to it.
+        "kinect,orb:b_role=camera,,,,0.05,0,",
+        "kinect,orb,,,,,0,",
+    ] {
+        assert!(runs.contains(key), "{key} in {runs}");
+    }
+    noisefree_ok(&["table", dir.to_str().unwrap()]);
+    let t3 = std::fs::read_to_string(dir.join("table3.md")).unwrap();
+    assert!(t3.contains("w/ MC-OR [sightings all] (ours)"), "{t3}");
+    assert!(
+        t3.contains("w/ MC-OR [sightings all, verdict consensus, scope tracking+mapping] (ours)"),
+        "{t3}"
+    );
+    let versus = std::fs::read_to_string(dir.join("versus-baseline.md")).unwrap();
+    assert!(
+        versus.contains("ORB-SLAM2 [b role camera] (ours)"),
+        "{versus}"
+    );
+    // A reading that is not one is refused naming those that are.
+    assert_clean_failure(
+        &tiny(&dir, "orb,mcor:verdict=vote", &[]),
+        "filter or consensus",
+    );
+    assert_clean_failure(&tiny(&dir, "avc:sightings=all", &[]), "MC-OR");
+    // The folder's configuration file is pinned: a file that sets a reading for every mcor
+    // run is refused where runs of the default readings are.
+    let file = dir.join("all-sightings.toml");
+    std::fs::write(&file, "[mcor]\nsightings = \"all\"\n").unwrap();
+    let f = file.to_str().unwrap();
+    assert_clean_failure(
+        &tiny(&dir, "mcor", &["--config", f]),
+        "mcor.sightings = \"all\"",
+    );
+    let pinned = tmpdir("readings-pinned");
+    assert_ok(&tiny(&pinned, "orb,mcor", &["--config", f]));
+    let settings = std::fs::read_to_string(pinned.join("sweep-settings.toml")).unwrap();
+    assert!(
+        settings.contains("readings = [\"mcor.sightings = \\\"all\\\"\"]"),
+        "{settings}"
+    );
+    assert_clean_failure(&tiny(&pinned, "orb,mcor", &[]), "default readings");
+    for d in [dir, pinned] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

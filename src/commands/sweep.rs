@@ -231,13 +231,16 @@ fn request(args: &SweepArgs, catalog: &Catalog) -> Result<SweepRequest> {
         .split(',')
         .map(str::trim)
         .filter(|s| !s.is_empty())
-        .map(|s| match ConfigKind::parse(s) {
-            Ok(k) => Ok(RunConfig::Ours(k)),
-            Err(_) if systems.contains_key(s) => Ok(RunConfig::System(s.to_string())),
-            Err(e) => Err(if systems.is_empty() {
-                e.context("an external system would be declared under [systems.NAME] in --config")
+        .map(|s| match RunConfig::parse_ours(s) {
+            Ok(Some(c)) => Ok(c),
+            Ok(None) if systems.contains_key(s) => Ok(RunConfig::System(s.to_string())),
+            Err(e) => Err(e),
+            Ok(None) => Err(if systems.is_empty() {
+                ConfigKind::parse(s).unwrap_err().context(
+                    "an external system would be declared under [systems.NAME] in --config",
+                )
             } else {
-                e.context(format!(
+                ConfigKind::parse(s).unwrap_err().context(format!(
                     "nor one of the systems of the config file ({})",
                     systems.keys().cloned().collect::<Vec<_>>().join(", ")
                 ))

@@ -59,9 +59,12 @@ pub fn system_label(config: &str, labels: &BTreeMap<String, String>) -> String {
     match ConfigKind::parse(config) {
         Ok(ConfigKind::Orb) => "ORB-SLAM2 (ours)".into(),
         Ok(k) => format!("{} (ours)", column_name(k)),
-        Err(_) => labels
-            .get(config)
-            .cloned()
-            .unwrap_or_else(|| config.to_string()),
+        Err(_) => match crate::readings::ReadingColumn::parse(config) {
+            Ok(Some(r)) => format!("{} [{}] (ours)", column_name(r.kind), r.label()),
+            _ => labels
+                .get(config)
+                .cloned()
+                .unwrap_or_else(|| config.to_string()),
+        },
     }
 }

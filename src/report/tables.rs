@@ -638,12 +638,7 @@ pub fn external_columns(
     names.dedup();
     names
         .into_iter()
-        .map(|n| {
-            (
-                n.to_string(),
-                labels.get(n).cloned().unwrap_or_else(|| n.to_string()),
-            )
-        })
+        .map(|n| (n.to_string(), system_label(n, labels)))
         .collect()
 }
 
@@ -656,6 +651,14 @@ fn external_notes(
 ) -> String {
     let mut out = Vec::new();
     for (name, label) in systems {
+        if let Ok(Some(r)) = crate::readings::ReadingColumn::parse(name) {
+            out.push(format!(
+                "{label}: noisefree's {} with the paper's open choices set as its name says \
+                 (`{name}`; the readings are described in results/readings/README.md).",
+                column_name(r.kind)
+            ));
+            continue;
+        }
         let mut text = format!(
             "{label}: the external system `{name}` run by the harness on the same files (its threads' own run-to-run spread; keyframes and map points not reported)"
         );

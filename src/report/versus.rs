@@ -404,12 +404,13 @@ fn render_rows(
         "Mean of the runs that did not fail with the 95 % interval of the mean (Student's t); \
          each system against our ORB-SLAM2 baseline at the same sequence and perturbation: the \
          difference of mean ATEs in % of the baseline's mean (negative: lower ATE), its 95 % \
-         interval (the interval of the difference over the baseline's mean) and the two-sided \
-         p-value, by the paired t-test where both systems ran on the same seeds and perturbation \
-         draws (every run with its partner), Welch's t-test otherwise. {comparisons} comparisons \
-         in this table, Holm-corrected together; a difference in **bold** survives the \
-         correction at {ALPHA}. Where both systems' runs are each all identical (one result each), \
-         nothing is tested.{}",
+         interval (Fieller's interval of the ratio of the two means under the same test, so the \
+         baseline mean's own uncertainty counts; `[unbounded]` where the baseline's mean is not \
+         told from zero) and the two-sided p-value, by the paired t-test where both systems ran \
+         on the same seeds and perturbation draws (every run with its partner), Welch's t-test \
+         otherwise. {comparisons} comparisons in this table, Holm-corrected together; a \
+         difference in **bold** survives the correction at {ALPHA}. Where both systems' runs \
+         are each all identical (one result each), nothing is tested.{}",
         if paper {
             " `paper`: the paper's figure for the system's column on the sequence a twin \
              imitates, and its difference from the paper's ORB-SLAM2 figure in %."

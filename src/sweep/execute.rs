@@ -187,6 +187,10 @@ pub fn settle_folder(req: &SweepRequest, plan: &Plan) -> Result<Folder> {
         .as_ref()
         .map(crate::config_file::approximations)
         .unwrap_or_default();
+    let readings = file_config
+        .as_ref()
+        .map(crate::config_file::readings)
+        .unwrap_or_default();
     // The reading of the `mcor` and `mcor+avc` columns: the config file's, else the default.
     let mcor_cluster = file_config
         .and_then(|c| c.mcor)
@@ -203,6 +207,7 @@ pub fn settle_folder(req: &SweepRequest, plan: &Plan) -> Result<Folder> {
             loop_closing: loop_closing_on,
             mcor_cluster,
             approximations,
+            readings,
             synth_without,
         },
     )?;
@@ -211,7 +216,7 @@ pub fn settle_folder(req: &SweepRequest, plan: &Plan) -> Result<Folder> {
         .iter()
         .filter_map(|k| match k {
             RunConfig::System(name) => Some((name.clone(), req.systems[name].clone())),
-            RunConfig::Ours(_) => None,
+            RunConfig::Ours(_) | RunConfig::Reading { .. } => None,
         })
         .collect();
     let recorded = crate::sweep::store::load_dir(&req.out)?;

@@ -40,12 +40,20 @@ pub fn job_config(base: &Config, job: &Job) -> Config {
         a.baseline = job.params.baseline.unwrap_or(a.baseline);
         a
     });
+    if let Some(reading) = job.config.reading() {
+        reading.apply(&mut c, job.params.baseline);
+    }
     c
 }
 
 /// A file-name-safe tag of a job's configuration and parameters (its trajectories' folder).
 pub fn job_tag(job: &Job) -> String {
-    let mut tag = job.config.name().replace('+', "-");
+    let mut tag = job
+        .config
+        .name()
+        .replace('+', "-")
+        .replace(':', "_")
+        .replace(['=', '/'], "-");
     let p = &job.params;
     if let (Some(a), Some(b), Some(c)) = (p.tau_mf, p.tau_gf, p.tau_mg) {
         tag.push_str(&format!("_t{a}-{b}-{c}"));

@@ -276,20 +276,26 @@ pub fn expand(sequences: &[String], configs: &[RunConfig], grids: &Grids, runs: 
                 continue;
             };
             let mut params = Vec::new();
-            let mcor_grid: Vec<(Option<f64>, Option<f64>, Option<f64>)> = if kind.mcor() {
-                let mut v = Vec::new();
-                for &a in &grids.tau_mf {
-                    for &b in &grids.tau_gf {
-                        for &c in &grids.tau_mg {
-                            v.push((Some(a), Some(b), Some(c)));
+            let reading = config.reading();
+            let own_taus = reading.and_then(|r| r.readings.tau);
+            let mcor_grid: Vec<(Option<f64>, Option<f64>, Option<f64>)> =
+                if let Some((a, b, c)) = own_taus {
+                    vec![(Some(a), Some(b), Some(c))]
+                } else if kind.mcor() {
+                    let mut v = Vec::new();
+                    for &a in &grids.tau_mf {
+                        for &b in &grids.tau_gf {
+                            for &c in &grids.tau_mg {
+                                v.push((Some(a), Some(b), Some(c)));
+                            }
                         }
                     }
-                }
-                v
-            } else {
-                vec![(None, None, None)]
-            };
-            let avc_grid: Vec<Option<f64>> = if kind.avc() {
+                    v
+                } else {
+                    vec![(None, None, None)]
+                };
+            let takes_baseline = reading.map_or(kind.avc(), |r| r.takes_baseline());
+            let avc_grid: Vec<Option<f64>> = if takes_baseline {
                 grids.baseline.iter().map(|&b| Some(b)).collect()
             } else {
                 vec![None]
@@ -308,7 +314,7 @@ pub fn expand(sequences: &[String], configs: &[RunConfig], grids: &Grids, runs: 
                 for seed in 0..runs {
                     jobs.push(Job {
                         sequence: seq.clone(),
-                        config: RunConfig::Ours(kind),
+                        config: config.clone(),
                         params: p,
                         seed,
                         synth_seed: None,

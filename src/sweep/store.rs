@@ -176,6 +176,11 @@ pub struct FolderSettings {
     /// `[avc] aim = "direct"`, `[mcor] view_stride = K`; see
     /// [`approximations`](crate::config_file::approximations)), sorted; empty: the reference.
     pub approximations: Vec<String>,
+    /// The readings of the paper (issue 72) the sweep's configuration file set away from their
+    /// defaults, as its settings (`mcor.sightings = "all"`; see
+    /// [`readings`](crate::config_file::readings)), sorted; empty: the defaults. Columns that
+    /// name their readings (`mcor:sightings=all`) say them themselves.
+    pub readings: Vec<String>,
 }
 
 impl Default for FolderSettings {
@@ -189,6 +194,7 @@ impl Default for FolderSettings {
             mcor_cluster: ClusterViews::Keyframes,
             synth_without: Vec::new(),
             approximations: Vec::new(),
+            readings: Vec::new(),
         }
     }
 }
@@ -235,6 +241,8 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
             let synth_without = string_list(&v, "synth_without", "effect names", &path)?;
             // Absent: the reference (folders from before the field had no approximation).
             let approximations = string_list(&v, "approximations", "settings", &path)?;
+            // Absent: the default readings (folders from before the readings existed).
+            let readings = string_list(&v, "readings", "settings", &path)?;
             Ok(FolderSettings {
                 mapping_lag,
                 vocabulary,
@@ -242,6 +250,7 @@ pub fn settings_of(dir: &Path) -> Result<FolderSettings> {
                 mcor_cluster,
                 synth_without,
                 approximations,
+                readings,
             })
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(FolderSettings::default()),
@@ -359,6 +368,23 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
                 says(&settings.approximations)
             );
         }
+        if recorded.readings != settings.readings {
+            let says = |r: &[String]| {
+                if r.is_empty() {
+                    "the default readings".to_string()
+                } else {
+                    format!("the readings {}", r.join(", "))
+                }
+            };
+            bail!(
+                "{} holds runs made with {}; this sweep's configuration has {}: use another \
+                 --out folder, or name the readings in the columns (--configs \
+                 mcor:sightings=all,...) to compare them side by side",
+                dir.display(),
+                says(&recorded.readings),
+                says(&settings.readings)
+            );
+        }
     }
     let mut text = format!(
         "# how every run in this folder was made (a sweep with other settings is refused here)\n\
@@ -373,6 +399,9 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
     }
     if !settings.approximations.is_empty() {
         text += &format!("approximations = {:?}\n", settings.approximations);
+    }
+    if !settings.readings.is_empty() {
+        text += &format!("readings = {:?}\n", settings.readings);
     }
     ate_eval::io::write_atomic(&path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
@@ -797,6 +826,7 @@ mod tests {
             mcor_cluster: ClusterViews::EveryFrame,
             synth_without: Vec::new(),
             approximations: Vec::new(),
+            readings: Vec::new(),
         };
         pin_settings(&d, &every).unwrap();
         assert_eq!(settings_of(&d).unwrap(), every);
