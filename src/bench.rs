@@ -8,6 +8,7 @@
 //! keeps each one's fastest run; [`figures_header`] and [`figures_rows`] print them; [`Bench::sweep`] times the
 //! sweep figure; [`Report`] is the JSON of it all.
 
+use crate::readings::ReadingColumn;
 use crate::regress::cases::trajectory_hash;
 use crate::runner::{run_extracted, ExtractedSequence, RunOutcome};
 use crate::sweep::job::job_config;
@@ -69,6 +70,8 @@ pub struct BenchConfig {
     direct_aim: bool,
     /// `:strideK`: MC-OR's every-frame clusters under `[mcor] view_stride = K`.
     view_stride: Option<u32>,
+    /// Readings of the paper (`:sightings=all`, `:paper`, ...; `crate::readings`).
+    reading: Option<ReadingColumn>,
 }
 
 impl BenchConfig {
@@ -78,16 +81,24 @@ impl BenchConfig {
             kind,
             direct_aim: false,
             view_stride: None,
+            reading: None,
         }
     }
 
     /// Parses `NAME`, then any of the variants `:direct` (a configuration with AVC) and
-    /// `:strideK` (a configuration with MC-OR's every-frame clusters, K >= 1), each once.
+    /// `:strideK` (a configuration with MC-OR's every-frame clusters, K >= 1), each once, and
+    /// readings of the paper as a sweep's columns name them (`:sightings=all`, `:paper`).
     pub fn parse(s: &str) -> Result<BenchConfig> {
         let mut parts = s.trim().split(':');
-        let kind = ConfigKind::parse(parts.next().unwrap_or_default())?;
+        let base = parts.next().unwrap_or_default();
+        let kind = ConfigKind::parse(base)?;
         let mut c = BenchConfig::exact(kind);
+        let mut readings = Vec::new();
         for variant in parts {
+            if variant == "paper" || variant.contains('=') {
+                readings.push(variant);
+                continue;
+            }
             if variant == "direct" {
                 if !kind.avc() {
                     bail!("\"{s}\": `:direct` is an approximation of AVC, and {kind} has no AVC");
@@ -111,15 +122,25 @@ impl BenchConfig {
                 }
                 c.view_stride = Some(stride);
             } else {
-                bail!("\"{s}\": unknown variant \"{variant}\" (known: direct, strideK)");
+                bail!(
+                    "\"{s}\": unknown variant \"{variant}\" (known: direct, strideK, and \
+                     readings key=value or paper)"
+                );
             }
+        }
+        if !readings.is_empty() {
+            let spelled = format!("{base}:{}", readings.join(":"));
+            c.reading = ReadingColumn::parse(&spelled).with_context(|| format!("\"{s}\""))?;
         }
         Ok(c)
     }
 
     /// The column's name: the configuration's, then its variants (`:direct`, `:strideK`).
     pub fn name(self) -> String {
-        let mut name = self.kind.name().to_string();
+        let mut name = match self.reading {
+            Some(r) => r.name(),
+            None => self.kind.name().to_string(),
+        };
         if self.direct_aim {
             name.push_str(":direct");
         }
@@ -211,23 +232,7 @@ impl Bench {
     /// One timed run of `bench` with SLAM seed `seed` (tracking + mapping + loop closing):
     /// its wall time in seconds and its outcome.
     pub fn track(&self, bench: BenchConfig, seed: u64) -> (f64, RunOutcome) {
-        let job = Job {
-            sequence: self.label.clone(),
-            config: RunConfig::Ours(bench.kind),
-            params: Params::default(),
-            seed,
-            synth_seed: None,
-            perturbation: None,
-        };
-        let mut config = job_config(&self.base, &job);
-        if bench.direct_aim {
-            if let Some(avc) = config.avc.as_mut() {
-                avc.aim = AvcAim::Direct;
-            }
-        }
-        if let (Some(k), Some(mcor)) = (bench.view_stride, config.mcor.as_mut()) {
-            mcor.view_stride = k;
-        }
+        let config = run_config(&self.base, &self.label, bench, seed);
         let t = Instant::now();
         let o = run_extracted(
             &self.seq,
@@ -415,9 +420,65 @@ pub fn figures_rows(figures: &[ConfigFigures], w: usize) -> String {
     s
 }
 
+/// The configuration a bench column runs with seed `seed` on sequence `label`: the sweep's
+/// (`job_config` over `base`, readings included), then the column's approximations.
+fn run_config(base: &Config, label: &str, bench: BenchConfig, seed: u64) -> Config {
+    let job = Job {
+        sequence: label.to_string(),
+        config: match bench.reading {
+            Some(r) => RunConfig::Reading {
+                kind: r.kind,
+                name: r.name(),
+            },
+            None => RunConfig::Ours(bench.kind),
+        },
+        params: Params::default(),
+        seed,
+        synth_seed: None,
+        perturbation: None,
+    };
+    let mut config = job_config(base, &job);
+    if bench.direct_aim {
+        if let Some(avc) = config.avc.as_mut() {
+            avc.aim = AvcAim::Direct;
+        }
+    }
+    if let (Some(k), Some(mcor)) = (bench.view_stride, config.mcor.as_mut()) {
+        mcor.view_stride = k;
+    }
+    config
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_reading_column_benches_the_configuration_under_its_readings() {
+        let c = BenchConfig::parse("mcor:stride2:verdict=consensus:sightings=all").unwrap();
+        assert_eq!(c.name(), "mcor:sightings=all:verdict=consensus:stride2");
+        let run = run_config(&Config::default(), "kinect", c, 3);
+        let m = run.mcor.unwrap();
+        assert_eq!(m.verdict, slam_core::system::Verdict::Consensus);
+        assert_eq!(m.sightings, slam_core::system::Sightings::All);
+        assert_eq!(m.view_stride, 2);
+        assert_eq!(run.seed, 3);
+        let plain = run_config(
+            &Config::default(),
+            "kinect",
+            BenchConfig::parse("mcor").unwrap(),
+            3,
+        );
+        assert_eq!(
+            plain.mcor.unwrap().verdict,
+            slam_core::system::Verdict::Filter
+        );
+        let e = format!(
+            "{:#}",
+            BenchConfig::parse("avc:scope=tracking+mapping").unwrap_err()
+        );
+        assert!(e.contains("MC-OR"), "{e}");
+    }
 
     #[test]
     fn a_direct_variant_is_the_configuration_with_avc_aimed_directly() {

@@ -64,9 +64,14 @@ pub struct SweepArgs {
     /// AVC virtual-camera baselines in metres (e.g. `0.01:0.13:0.02` for Table I).
     #[arg(long, default_value = "0.09", value_name = "VALUES")]
     pub baseline: String,
-    /// Seeded runs per sequence and parameter set (seeds 0..n-1).
+    /// Seeded runs per sequence and parameter set (seeds K..K+n-1, K = --first-seed).
     #[arg(long, default_value_t = 10)]
     pub runs: u64,
+    /// The first run's seed K: runs use seeds K..K+n-1, and under per-run perturbation draws
+    /// run k draws perturbation --perturb-seed + k. Fresh draws for a comparison that must not
+    /// reuse those that chose its setting (e.g. --first-seed 10 after a study on seeds 0..9).
+    #[arg(long = "first-seed", value_name = "K", default_value_t = 0)]
+    pub first_seed: u64,
     /// Parallel runs at once [default: all cores].
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -279,6 +284,7 @@ fn request(args: &SweepArgs, catalog: &Catalog) -> Result<SweepRequest> {
         systems,
         grids,
         runs: args.runs,
+        first_seed: args.first_seed,
         threads: args.jobs,
         out: args.out.clone(),
         shard,

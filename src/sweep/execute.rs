@@ -41,6 +41,8 @@ pub struct SweepRequest {
     pub grids: Grids,
     /// Seeded runs per sequence, configuration and parameter set.
     pub runs: u64,
+    /// The first run's seed (runs use `first_seed..first_seed + runs`).
+    pub first_seed: u64,
     /// Parallel runs at once (`None`: every core).
     pub threads: Option<usize>,
     /// Output folder.
@@ -100,7 +102,12 @@ pub fn plan(req: &SweepRequest, catalog: &Catalog) -> Result<Plan> {
     let labels: Vec<String> = req.sources.iter().map(Source::label).collect();
     let points = perturbation_points(&req.axes, &req.with, req.perturb_seed);
     let mut jobs = with_perturbations(
-        expand(&labels, &req.kinds, &req.grids, req.runs),
+        expand(
+            &labels,
+            &req.kinds,
+            &req.grids,
+            req.first_seed..req.first_seed + req.runs,
+        ),
         &points,
         !req.perturb_shared,
     );

@@ -252,13 +252,18 @@ pub struct Grids {
 
 /// Expands sequences x configurations x grids x seeds into the ordered job list:
 /// sequence-major (so a sequence is decoded once and its runs go together), then
-/// configuration, parameters, seed. External systems take no parameters.
-pub fn expand(sequences: &[String], configs: &[RunConfig], grids: &Grids, runs: u64) -> Vec<Job> {
+/// configuration, parameters, seed (each of `seeds`). External systems take no parameters.
+pub fn expand(
+    sequences: &[String],
+    configs: &[RunConfig],
+    grids: &Grids,
+    seeds: std::ops::Range<u64>,
+) -> Vec<Job> {
     let mut jobs = Vec::new();
     for seq in sequences {
         for config in configs {
             let Some(kind) = config.kind() else {
-                for seed in 0..runs {
+                for seed in seeds.clone() {
                     jobs.push(Job {
                         sequence: seq.clone(),
                         config: config.clone(),
@@ -311,7 +316,7 @@ pub fn expand(sequences: &[String], configs: &[RunConfig], grids: &Grids, runs: 
                 }
             }
             for p in params {
-                for seed in 0..runs {
+                for seed in seeds.clone() {
                     jobs.push(Job {
                         sequence: seq.clone(),
                         config: config.clone(),
@@ -454,7 +459,7 @@ mod tests {
         };
         let mut configs: Vec<RunConfig> = ConfigKind::ALL.map(RunConfig::Ours).to_vec();
         configs.push(RunConfig::System("orbslam2".into()));
-        let jobs = expand(&["a".into(), "b".into()], &configs, &grids, 3);
+        let jobs = expand(&["a".into(), "b".into()], &configs, &grids, 0..3);
         // per sequence: orb 1 + mcor 2 + avc 2 + mcor+avc 4 = 9 parameter sets, and the
         // external system's one, x 3 seeds
         assert_eq!(jobs.len(), 2 * 10 * 3);
@@ -496,7 +501,7 @@ mod tests {
             RunConfig::Ours(ConfigKind::Orb),
             RunConfig::Ours(ConfigKind::Avc),
         ];
-        let jobs = expand(&["a".into(), "b".into()], &configs, &grids, 2);
+        let jobs = expand(&["a".into(), "b".into()], &configs, &grids, 0..2);
         let pts = perturbation_points(&axes, &perturb::Chain::default(), 5);
         let all = with_perturbations(jobs.clone(), &pts, false);
         assert_eq!(all.len(), jobs.len() * 4);
