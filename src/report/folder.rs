@@ -70,6 +70,15 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         all.push('\n');
         all.push_str(&t1.markdown);
     }
+    if let Some(t1) = crate::report::tables::table1_camera(&records, catalog, paper, &labels) {
+        write_table(dir, "table1-camera", &t1)?;
+        index.push((
+            "table1-camera".into(),
+            "Table I under b_role = \"camera\": ATE against b as the camera's baseline".into(),
+        ));
+        all.push('\n');
+        all.push_str(&t1.markdown);
+    }
     if let Some(v) = crate::report::versus::versus_baseline(&all_records, catalog, paper, &labels) {
         write_table(dir, "versus-baseline", &v)?;
         index.push((
@@ -78,6 +87,16 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         ));
         all.push('\n');
         all.push_str(&v.markdown);
+        let rows = crate::report::findings::read_versus(dir)?;
+        if let Some(r) = crate::report::readings::readings_table(&rows, catalog, &labels) {
+            write_table(dir, "readings", &r)?;
+            index.push((
+                "readings".into(),
+                "the readings: each technique under every reading against the baseline".into(),
+            ));
+            all.push('\n');
+            all.push_str(&r.markdown);
+        }
     }
     let t4 = table4(&records, catalog, &labels);
     write_table(dir, "table4", &t4)?;

@@ -10,6 +10,7 @@ pub mod findings;
 pub mod folder;
 pub mod fps;
 pub mod markdown;
+pub mod readings;
 pub mod resilience;
 pub mod stats;
 pub mod tables;

@@ -170,7 +170,14 @@ pub(crate) fn paper_figures(
         None => entry,
     };
     let p = row.paper.as_ref()?;
-    let col = match ConfigKind::parse(config).ok()? {
+    // A reading of a technique is compared with the paper's figure for that technique.
+    let kind = ConfigKind::parse(config).ok().or_else(|| {
+        crate::readings::ReadingColumn::parse(config)
+            .ok()
+            .flatten()
+            .map(|r| r.kind)
+    })?;
+    let col = match kind {
         ConfigKind::Orb => p.orb_slam2,
         ConfigKind::Mcor => p.mcor,
         ConfigKind::Avc => p.avc,
