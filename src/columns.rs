@@ -82,8 +82,10 @@ impl ConfigKind {
             "mcor-keyframes+avc" | "avc+mcor-keyframes" => ConfigKind::McorKeyframesAvc,
             "rc" => ConfigKind::Rc,
             other => bail!(
-                "unknown configuration {other:?}; expected orb, mcor, avc, mcor+avc, mcor-frames, \
-                 mcor-frames+avc, mcor-keyframes, mcor-keyframes+avc or rc"
+                "unknown configuration {other:?}{}; expected orb, mcor, avc, mcor+avc, \
+                 mcor-frames, mcor-frames+avc, mcor-keyframes, mcor-keyframes+avc or rc, \
+                 each with readings if wanted (mcor:sightings=all)",
+                crate::suggest::did_you_mean(other, ConfigKind::EVERY.map(ConfigKind::name))
             ),
         })
     }

@@ -84,14 +84,11 @@ pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
     unknown_keys(&over, &known, "", &mut unknown);
     if !unknown.is_empty() {
         anyhow::bail!(
-            "{}: unknown setting{} {} (see the fields of slam_core::system::Config)",
+            "{}: unknown setting{} {} (`noisefree config` prints every setting with its \
+             default)",
             path.display(),
             if unknown.len() == 1 { "" } else { "s" },
-            unknown
-                .iter()
-                .map(|k| format!("`{k}`"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            unknown.join(", ")
         );
     }
     // Values that parse but make no sense (`[orb] scale_factor = 0.5`) are refused here, with
@@ -100,6 +97,28 @@ pub fn overlay_file(base: &Config, path: &Path) -> Result<Config> {
         .check()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     Ok(config)
+}
+
+/// Every setting of the config TOML with its default for `sensor`, the techniques' sections
+/// included (present: switched on), as a file to start from.
+pub fn defaults_text(sensor: SensorKind) -> Result<String> {
+    let mut c = base_config(sensor);
+    c.mcor = Some(McorParams::default());
+    c.avc = Some(AvcParams::default());
+    c.rc = Some(RigidConsensusParams::default());
+    let body = toml::to_string(&c).context("serialising the defaults")?;
+    Ok(format!(
+        "# Every setting of noisefree's config TOML (`--config FILE`) with its default for a {} \
+         sensor.\n# A file may hold any subset; a key not listed here is refused. The [mcor], \
+         [avc] and [rc] sections switch\n# their technique on by being there (delete a section \
+         to leave it off). Not listed because unset by\n# default: `rgbd_baseline = B` (the \
+         RGB-D camera's baseline in metres; see docs/readings.md), and\n# `vocabulary = \
+         \"FILE\"` (or \"none\") beside the settings.\n\n{body}",
+        match sensor {
+            SensorKind::Stereo => "stereo",
+            SensorKind::Rgbd => "RGB-D",
+        }
+    ))
 }
 
 /// Dotted paths of the keys of `file` that `known` (the parsed configuration, serialised
@@ -116,7 +135,10 @@ fn unknown_keys(file: &toml::Value, known: &toml::Value, prefix: &str, out: &mut
         };
         match k.get(key) {
             Some(kv) => unknown_keys(v, kv, &path, out),
-            None => out.push(path),
+            None => out.push(format!(
+                "`{path}`{}",
+                crate::suggest::did_you_mean(key, k.keys().map(String::as_str))
+            )),
         }
     }
 }
@@ -246,6 +268,42 @@ pub fn config_name(c: &Config) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_misspelt_key_is_refused_with_the_key_meant() {
+        let p = file(
+            "typo",
+            "[mcor]\ntau_mff = 0.3\n[tracking]\nlocal_ratioo = 1\nbogus = 2\n",
+        );
+        let e = format!("{:#}", overlay_file(&Config::default(), &p).unwrap_err());
+        assert!(e.contains("`mcor.tau_mff` (did you mean `tau_mf`?)"), "{e}");
+        assert!(
+            e.contains("`tracking.local_ratioo` (did you mean `local_ratio`?)"),
+            "{e}"
+        );
+        assert!(
+            e.contains("`tracking.bogus`,") || e.contains("`tracking.bogus` ("),
+            "{e}"
+        );
+        assert!(e.contains("noisefree config"), "{e}");
+    }
+
+    #[test]
+    fn the_printed_defaults_are_a_file_that_reads_back_as_the_defaults() {
+        for sensor in [SensorKind::Rgbd, SensorKind::Stereo] {
+            let text = defaults_text(sensor).unwrap();
+            for key in ["sightings", "verdict", "scope", "gate", "b_role", "tau_mf"] {
+                assert!(text.contains(&format!("\n{key} = ")), "{key} in\n{text}");
+            }
+            let p = file(&format!("defaults-{sensor:?}"), &text);
+            let read = overlay_file(&base_config(sensor), &p).unwrap();
+            let mut expected = base_config(sensor);
+            expected.mcor = Some(McorParams::default());
+            expected.avc = Some(AvcParams::default());
+            expected.rc = Some(RigidConsensusParams::default());
+            assert_eq!(read, expected);
+        }
+    }
 
     fn file(name: &str, text: &str) -> std::path::PathBuf {
         let dir = std::env::temp_dir().join(format!("nf-config-{}-{name}", std::process::id()));

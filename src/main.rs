@@ -22,6 +22,7 @@ mod report;
 mod runner;
 mod seeded_runs;
 mod select;
+mod suggest;
 mod sweep;
 mod vocab_file;
 
@@ -68,6 +69,9 @@ enum Command {
     /// A sequence's camera as an ORB-SLAM2 / ORB-SLAM3 settings file (YAML), for running
     /// another system on the same files.
     Settings(commands::settings::SettingsArgs),
+    /// Every setting of the config TOML (`--config FILE`) with its default, for one sensor: a
+    /// file to start from.
+    Config(commands::config::ConfigArgs),
     /// Per-frame tracking + mapping cost of each configuration on one sequence, one core, and
     /// the frames per second of a sweep of the paper's four configurations.
     Bench(commands::bench::BenchArgs),
@@ -96,6 +100,7 @@ fn main() -> ExitCode {
         Command::Vocab(a) => commands::vocab::run(a),
         Command::Bench(a) => commands::bench::run(a),
         Command::Settings(a) => commands::settings::run(a),
+        Command::Config(a) => commands::config::run(a),
         Command::Match(a) => commands::match_level::run(a),
     };
     match result {

@@ -420,6 +420,10 @@ fn readings_stand_side_by_side_as_columns_and_a_folder_pins_its_configs_readings
         &[],
     ));
     let runs = std::fs::read_to_string(dir.join("runs.csv")).unwrap();
+    assert!(
+        !dir.join("runs.csv.lock").exists(),
+        "a finished sweep leaves no lock"
+    );
     for key in [
         "kinect,mcor:sightings=all,0.7,0.7,0.5,,0,",
         "kinect,mcor:sightings=all:verdict=consensus:scope=tracking+mapping,0.7,0.7,0.5,,0,",
@@ -447,6 +451,8 @@ fn readings_stand_side_by_side_as_columns_and_a_folder_pins_its_configs_readings
         "filter or consensus",
     );
     assert_clean_failure(&tiny(&dir, "avc:sightings=all", &[]), "MC-OR");
+    // A typo is answered with the name meant.
+    assert_clean_failure(&tiny(&dir, "orb,mcorr", &[]), "did you mean `mcor`?");
     // The folder's configuration file is pinned: a file that sets a reading for every mcor
     // run is refused where runs of the default readings are.
     let file = dir.join("all-sightings.toml");

@@ -26,3 +26,28 @@ ROWS+=,twin_fr1_desk,twin_fr1_360,twin_fr1_room,twin_fr3_nst,twin_mh04,twin_v203
 "$NF" sweep --seq "$ROWS" --configs "$COLUMNS" --runs 10 --mapping-lag 3 --quiet \
   --out results/readings/screening
 "$NF" table --paper results/readings/screening
+# 2. Under the error each technique is said to fix, 400 frames as resilience/: MC-OR's readings
+#    under flying pixels at depth boundaries (depth-edges, a band of 0 to 8 px: the paper's
+#    Fig. 2 lateral noise) and under independent lateral noise; AVC's under axial noise.
+#    Run i of every column and level on perturbation draw i (paired).
+MCOR_COLUMNS=orb,mcor,mcor:sightings=all,mcor:verdict=consensus,mcor:scope=tracking+mapping,mcor:paper
+"$NF" sweep --seq twin_fr2_coke,twin_fr1_desk,twin_fr3_office --frames 400 --configs "$MCOR_COLUMNS" \
+  --runs 10 --mapping-lag 3 --perturb depth-edges:0,1,2,4,8 --perturb depth-lateral:0,1,2,4,8 \
+  --quiet --out results/readings/mcor-under-noise
+"$NF" table --paper results/readings/mcor-under-noise
+"$NF" sweep --seq twin_fr2_coke,twin_fr1_desk,twin_fr3_office --frames 400 \
+  --configs orb,avc,avc:gate=3dof,avc:b_role=camera --runs 10 --mapping-lag 3 \
+  --perturb depth-axial:0,8,32,128 --quiet --out results/readings/avc-under-noise
+"$NF" table --paper results/readings/avc-under-noise
+# 3. Table I under b_role = "camera" on the fr3_w_rpy twin, whole sequence: the baseline's row
+#    moves with b (its camera baseline), beside the residual reading's avc and the paper's rows.
+"$NF" sweep --seq twin_fr3_w_rpy --configs orb,avc,orb:b_role=camera,avc:b_role=camera \
+  --baseline 0.01:0.13:0.02 --runs 10 --mapping-lag 3 --quiet --out results/readings/table1
+"$NF" table --paper results/readings/table1
+# 4. Stage two, on fresh draws (seeds 10..19): the readings the screening finds gaining
+#    anywhere, on all 31 rows. READINGS=<columns>, chosen from screening/readings.md only.
+if [ -n "${READINGS:-}" ]; then
+  "$NF" sweep --table3 --configs "orb,$READINGS" --runs 10 --first-seed 10 --mapping-lag 3 \
+    --quiet --out results/readings/all-rows
+  "$NF" table --paper results/readings/all-rows
+fi

@@ -3,6 +3,7 @@
 
 pub mod analyze;
 pub mod bench;
+pub mod config;
 pub mod eval;
 pub mod features;
 pub mod fetch;

@@ -240,16 +240,21 @@ fn request(args: &SweepArgs, catalog: &Catalog) -> Result<SweepRequest> {
             Ok(Some(c)) => Ok(c),
             Ok(None) if systems.contains_key(s) => Ok(RunConfig::System(s.to_string())),
             Err(e) => Err(e),
-            Ok(None) => Err(if systems.is_empty() {
-                ConfigKind::parse(s).unwrap_err().context(
-                    "an external system would be declared under [systems.NAME] in --config",
-                )
-            } else {
-                ConfigKind::parse(s).unwrap_err().context(format!(
-                    "nor one of the systems of the config file ({})",
-                    systems.keys().cloned().collect::<Vec<_>>().join(", ")
-                ))
-            }),
+            Ok(None) => {
+                let ours = ConfigKind::parse(s).unwrap_err();
+                Err(if systems.is_empty() {
+                    anyhow::anyhow!(
+                        "{ours:#} (an external system would be declared under [systems.NAME] in \
+                         --config)"
+                    )
+                } else {
+                    anyhow::anyhow!(
+                        "{ours:#}, nor one of the systems of the config file ({}){}",
+                        systems.keys().cloned().collect::<Vec<_>>().join(", "),
+                        crate::suggest::did_you_mean(s, systems.keys().map(String::as_str))
+                    )
+                })
+            }
         })
         .collect::<Result<_>>()?;
     if kinds.is_empty() {

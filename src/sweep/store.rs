@@ -487,6 +487,15 @@ pub struct RunStore {
     _lock: File,
 }
 
+impl Drop for RunStore {
+    /// A sweep that ends leaves no lock file behind: it is removed while still held, so no
+    /// other sweep can take a lock on the file being removed. (A sweep killed keeps its file;
+    /// the lock itself is released by the system, and the next sweep takes it.)
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(self.path.with_extension("csv.lock"));
+    }
+}
+
 /// Takes the advisory lock of record file `path` (`<file>.lock`, holding who took it): one
 /// sweep at a time writes a record file, while the shards of one job array, each with its own
 /// file, write side by side. A second sweep is refused with the holder's pid and command line.
