@@ -242,22 +242,42 @@ pub fn record(
         summary["perturbation_seed"] = json!(perturb_seed);
         write_run(&dir, &summary, o)?;
         summaries.push(summary);
-        let ate = o
-            .ate_rmse()
-            .map(|a| format!("{a:.4} m"))
-            .unwrap_or_else(|| "n/a".into());
+        let ate = match (o.ate_rmse(), &loaded.seq.groundtruth) {
+            (Some(a), _) => metres_text(a),
+            (None, None) => "n/a (the sequence has no ground truth)".into(),
+            (None, Some(_)) => "n/a (too few tracked poses matched a ground-truth stamp)".into(),
+        };
         println!(
-            "{label} [{cname}] seed {seed}: ATE RMSE {ate}, tracked {}/{} frames{}, {} keyframes, {} map points, {}, {:.1} fps",
+            "{label} [{cname}] seed {seed}: ATE RMSE {ate}, tracked {}/{} frames{}, {}, {}, {}, {:.1} fps",
             o.tracked,
             o.frames,
             if o.failed { " (FAILED)" } else { "" },
-            o.keyframes,
-            o.map_points,
+            counted(o.keyframes, "keyframe"),
+            counted(o.map_points, "map point"),
             loops_text(o),
             o.fps()
         );
     }
     Ok(summaries)
+}
+
+/// A length in metres with three significant digits (`0.000912 m`, `0.0231 m`, `1.20 m`): a
+/// sub-millimetre ATE keeps its digits.
+pub fn metres_text(m: f64) -> String {
+    if m == 0.0 || !m.is_finite() {
+        return format!("{m} m");
+    }
+    let decimals = (2 - m.abs().log10().floor() as i64).max(0) as usize;
+    format!("{m:.decimals$} m")
+}
+
+/// `n` things, in the singular for one: `1 keyframe`, `0 map points`.
+pub fn counted(n: usize, thing: &str) -> String {
+    if n == 1 {
+        format!("1 {thing}")
+    } else {
+        format!("{n} {thing}s")
+    }
 }
 
 /// Over several runs: prints their mean ATE, its population std and the failures, and writes
@@ -278,8 +298,10 @@ pub fn summarise(
     let std = (ates.iter().map(|a| (a - mean) * (a - mean)).sum::<f64>() / n).sqrt();
     let failures = results.iter().filter(|(_, o)| o.failed).count();
     println!(
-        "{label} [{cname}] over {} runs: mean ATE {mean:.4} m, std {std:.4} m, {failures} failed",
-        results.len()
+        "{label} [{cname}] over {} runs: mean ATE {}, std {}, {failures} failed",
+        results.len(),
+        metres_text(mean),
+        metres_text(std)
     );
     let doc = json!({"sequence": label, "config": cname, "runs": summaries, "mean_ate_m": mean, "std_ate_m": std, "failures": failures});
     write_atomic(
@@ -292,4 +314,22 @@ pub fn summarise(
 /// The default output folder of a sequence: `noisefree-out/<label>`.
 pub fn default_out(label: &str) -> PathBuf {
     PathBuf::from("noisefree-out").join(label)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_keep_three_significant_digits_and_counts_their_number() {
+        assert_eq!(metres_text(0.000_912_4), "0.000912 m");
+        assert_eq!(metres_text(0.023_14), "0.0231 m");
+        assert_eq!(metres_text(0.4039), "0.404 m");
+        assert_eq!(metres_text(1.2), "1.20 m");
+        assert_eq!(metres_text(123.4), "123 m");
+        assert_eq!(metres_text(0.0), "0 m");
+        assert_eq!(counted(1, "keyframe"), "1 keyframe");
+        assert_eq!(counted(3, "map point"), "3 map points");
+        assert_eq!(counted(0, "keyframe"), "0 keyframes");
+    }
 }

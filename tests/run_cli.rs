@@ -253,3 +253,58 @@ fn a_frame_cache_cap_that_is_not_a_number_is_refused_before_anything_runs() {
     assert_clean_failure(&out, "NOISEFREE_SYNTH_CACHE_GB=lots");
     assert!(!String::from_utf8_lossy(&out.stdout).contains("ATE"));
 }
+
+#[test]
+fn a_missing_ground_truth_is_named_as_such_and_the_ate_has_three_digits() {
+    let seq = tmpdir("no-gt-seq");
+    noisefree_ok(&[
+        "synth",
+        "--preset",
+        "kinect",
+        "--frames",
+        "30",
+        "--out",
+        seq.to_str().unwrap(),
+    ]);
+    let out = tmpdir("no-gt-out");
+    let with = noisefree_ok(&[
+        "run",
+        "--path",
+        seq.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&with.stdout).into_owned();
+    // "ATE RMSE 0.00123 m": three significant digits, whatever the size.
+    let ate = text
+        .split("ATE RMSE ")
+        .nth(1)
+        .unwrap()
+        .split(" m,")
+        .next()
+        .unwrap();
+    let digits: String = ate
+        .trim_start_matches(['0', '.'])
+        .chars()
+        .filter(char::is_ascii_digit)
+        .collect();
+    assert_eq!(digits.len(), 3, "{text}");
+    std::fs::remove_file(seq.join("groundtruth.txt")).unwrap();
+    let without = noisefree_ok(&[
+        "run",
+        "--path",
+        seq.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&without.stdout);
+    assert!(
+        text.contains("ATE RMSE n/a (the sequence has no ground truth)"),
+        "{text}"
+    );
+    for d in [seq, out] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
