@@ -222,6 +222,9 @@ pub fn readings(config: &Config) -> Vec<String> {
         if m.scope != d.scope {
             r.push(format!("mcor.scope = {:?}", m.scope.name()));
         }
+        if m.depth_normalised != d.depth_normalised {
+            r.push(format!("mcor.depth_normalised = {}", m.depth_normalised));
+        }
     }
     if let Some(a) = &config.avc {
         let d = AvcParams::default();

@@ -283,3 +283,12 @@ fn plot_draws_aligned_estimates_with_their_ate_and_refuses_missing_files() {
     ]);
     assert_clean_failure(&o, "/no/such/estimate.txt");
 }
+
+#[test]
+fn a_missing_file_is_named_once_with_its_reason() {
+    let out = common::noisefree(&["eval", "no/such/gt.txt", "no/such/est.txt"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no/such/gt.txt"), "{err}");
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
+}

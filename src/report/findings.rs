@@ -831,8 +831,8 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
         "**Results at a glance** (from {comparisons} comparisons with our baseline in {folders} \
          committed tables, Holm-corrected at {ALPHA}; intervals, verdicts and links in \
          [results/README.md]({}#findings)):\n\n\
-         - Table III on the twins, MC-OR, AVC and both against ORB-SLAM2: unperturbed, {}; \
-         under a real camera's systematic errors, {}.\n\
+         - Table III on the twins, MC-OR, AVC and both against ORB-SLAM2, unperturbed: {}.\n\
+         - The same under a real camera's systematic errors: {}.\n\
          - Under depth noise: MC-OR against lateral noise, {} of {} comparisons gain; AVC \
          against axial noise, {} of {} comparisons gain.\n",
         results_readme(base),

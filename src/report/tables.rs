@@ -655,7 +655,7 @@ fn external_notes(
         if let Ok(Some(r)) = crate::readings::ReadingColumn::parse(name) {
             out.push(format!(
                 "{label}: noisefree's {} with the paper's open choices set as its name says \
-                 (`{name}`; the readings are described in results/readings/README.md).",
+                 (`{name}`; docs/readings.md describes every reading).",
                 column_name(r.kind)
             ));
             continue;

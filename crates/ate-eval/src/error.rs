@@ -8,12 +8,13 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The file could not be opened or read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The underlying I/O error.
-        source: std::io::Error,
+        /// The underlying I/O error: in the message, not a `source` too, so that a chain of
+        /// errors printed whole (`{:#}`) names it once.
+        cause: std::io::Error,
     },
     /// A line of the file is malformed (wrong field count, not a number, NaN, bad rotation...).
     #[error("{path}:{line}: {message}")]

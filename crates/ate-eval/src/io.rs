@@ -61,9 +61,9 @@ const QUAT_MIN_NORM: f64 = 1e-6;
 /// The file's text; a file that is not UTF-8 text (binary junk, an image passed by mistake) is
 /// a parse error naming the line where the text stops being text.
 fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    let bytes = std::fs::read(path).map_err(|cause| Error::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     })?;
     String::from_utf8(bytes).map_err(|e| {
         let good = e.utf8_error().valid_up_to();
@@ -429,9 +429,9 @@ pub fn format_kitti(traj: &Trajectory) -> String {
 /// written whole or renamed is removed.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
     static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let io_err = |source| Error::Io {
+    let io_err = |cause| Error::Io {
         path: path.to_path_buf(),
-        source,
+        cause,
     };
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(io_err)?;
@@ -444,9 +444,9 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
     ));
     let tmp = PathBuf::from(tmp);
     let written = std::fs::write(&tmp, contents)
-        .map_err(|source| Error::Io {
+        .map_err(|cause| Error::Io {
             path: tmp.clone(),
-            source,
+            cause,
         })
         .and_then(|()| std::fs::rename(&tmp, path).map_err(io_err));
     if written.is_err() {
