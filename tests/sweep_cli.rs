@@ -540,3 +540,37 @@ fn first_seed_gives_fresh_draws_of_slam_and_perturbation() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+#[test]
+fn a_sweep_whose_runs_are_one_run_says_so_and_how_to_make_them_vary() {
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            "--seq",
+            "kinect",
+            "--configs",
+            "orb",
+            "--runs",
+            "2",
+            "--frames",
+            "20",
+            "--quiet",
+            "--out",
+        ];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        noisefree_ok(&args)
+    };
+    let sync = tmpdir("identical-sync");
+    let o = run(&sync, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("in 1 of the 1 cells with several runs every run gave the same result"),
+        "{err}"
+    );
+    assert!(err.contains("--mapping-lag 3"), "{err}");
+    noisefree_ok(&["table", sync.to_str().unwrap()]);
+    let t3 = std::fs::read_to_string(sync.join("table3.md")).unwrap();
+    assert!(t3.contains("In 1 of the 1 cells with several runs"), "{t3}");
+    let _ = std::fs::remove_dir_all(sync);
+}

@@ -208,6 +208,11 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let catalog = Catalog::embedded();
     let req = request(&args, &catalog)?;
     let done = crate::sweep::execute::sweep(&req, &catalog)?;
+    // Said even when quiet: tables of such cells would show n runs where there is one.
+    let records = crate::sweep::store::load_dir(&req.out)?;
+    if let Some(note) = crate::sweep::spread::identical_note(&records) {
+        eprintln!("{note}");
+    }
     if !args.quiet {
         eprintln!(
             "{} runs finished in {:.1} s, {}; records in {}",

@@ -492,6 +492,21 @@ fn paper_cell(p: Option<&datasets::catalog::PaperAte>, k: ConfigKind) -> String 
 /// The first part of Table III's notes: units, seeds, parameters, association and alignment,
 /// what 'F' means, and how the runs were made (mapping lag, varied realizations, MC-OR's
 /// clusters).
+/// The runs Table III shows: unperturbed, at the parameters it reports (ours), every run of
+/// an external system.
+fn shown_in_table3(records: &[RunRecord]) -> Vec<RunRecord> {
+    records
+        .iter()
+        .filter(|r| {
+            r.perturbation
+                .as_deref()
+                .is_none_or(|p| p.is_empty() || p == "none")
+                && (ConfigKind::parse(&r.config).is_err() || is_default(r))
+        })
+        .cloned()
+        .collect()
+}
+
 fn table3_protocol_notes(
     records: &[RunRecord],
     kinds: &[ConfigKind],
@@ -511,7 +526,7 @@ fn table3_protocol_notes(
          (tau_MF, tau_GF, tau_MG) = {:?} m, AVC baseline {} m. Association: evaluate_ate.py's (|dt| < 0.02 s, \
          greedy, each stamp once), SE3 Umeyama alignment; EuRoC estimates converted to the body frame. \
          'F': more than half the runs failed (fewer than 80 % of the frames tracked, or no ATE); `(kF)`: k \
-         failed runs left out of the mean. {}{}{}",
+         failed runs left out of the mean. {}{}{}{}",
         seeds.saturating_sub(1),
         DEFAULT_TAUS,
         DEFAULT_BASELINE,
@@ -524,6 +539,14 @@ fn table3_protocol_notes(
                  each keyframe is mapped 0..={n} frames late, drawn from the run's seed, so runs of \
                  one sequence spread as ORB-SLAM2's threads make them spread."
             ),
+        },
+        match crate::sweep::spread::identical_cells(&shown_in_table3(records)) {
+            (several, identical) if !identical.is_empty() => format!(
+                " In {} of the {several} cells with several runs every run gave the same result: \
+                 there the runs are one run (± 0 is no spread, and no test compares them).",
+                identical.len()
+            ),
+            _ => String::new(),
         },
         if varied_realizations(records) {
             " Synthetic sequences were swept with --vary-sequence: run k ran on its own realization of \

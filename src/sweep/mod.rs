@@ -11,4 +11,5 @@ pub mod job;
 pub mod plan;
 pub mod planned;
 pub mod progress;
+pub mod spread;
 pub mod store;
