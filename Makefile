@@ -8,7 +8,7 @@ help:
 	@echo "make lint   - cargo fmt --check + clippy -D warnings"
 	@echo "make layers - import graphs of src/ and every crate: no circle; synth and ate-eval keep their layers"
 	@echo "make fmt    - format the code"
-	@echo "make golden - rewrite tests/golden/regression.toml (only for an intended change; see README)"
+	@echo "make golden - rewrite tests/golden/regression.toml (only for an intended change; see docs/development.md)"
 	@echo "make vocabulary - retrain assets/vocabulary/noisefree-k10L5.voc (renders + real EuRoC frames)"
 	@echo "make results - the committed synthetic sweep: all presets x 4 configs x 10 runs, then tables + figures"
 	@echo "make fuzz   - every reader's fuzz target for FUZZ_SECS s (default 60) from FUZZ_SEED (default 0),"

@@ -3,7 +3,7 @@
 //! compares every figure with `tests/golden/regression.toml`. It fails, printing the old-vs-new
 //! table, when ATE or a count moves beyond its tolerance; a changed trajectory hash within
 //! tolerance is reported, not failed. Regenerate the golden file with `make golden` only for an
-//! intended change (README, "Regression suite").
+//! intended change (docs/development.md, "Regression suite").
 
 mod common;
 

@@ -18,7 +18,7 @@ pub struct RegressArgs {
     )]
     pub golden: PathBuf,
     /// Write the golden file from this run (with tolerances measured over --spread perturbed
-    /// reruns per case) instead of comparing. Only for an intended change; see the README.
+    /// reruns per case) instead of comparing. Only for an intended change; see docs/development.md.
     #[arg(long)]
     pub update: bool,
     /// Perturbed reruns per case (focal length changed by k x --perturbation) to measure the

@@ -44,7 +44,7 @@ pub struct SweepArgs {
     /// Configurations, comma-separated: the paper's orb, mcor, avc, mcor+avc; MC-OR with
     /// every-frame clusters, mcor-frames and mcor-frames+avc; noisefree's rigid consensus, rc;
     /// and any external SLAM system the --config file declares under [systems.NAME] (e.g. the
-    /// real ORB-SLAM2, see the README).
+    /// real ORB-SLAM2, see docs/systems.md).
     /// [default: orb,mcor,avc,mcor+avc; with --table3 orb,mcor,avc,mcor+avc,rc]
     #[arg(long, value_name = "LIST")]
     pub configs: Option<String>,

@@ -3,7 +3,7 @@
 //! `ImmutableKdTree`, the package the project's design names) on the same keypoints: building
 //! the structure once per frame, and one query at the window sizes the matchers use. Both
 //! return the same indices (checked before timing), so a switch would change no trajectory;
-//! the figures decide (README, "Dependencies").
+//! the figures decide (docs/architecture.md, "Packages").
 //! Run: `cargo bench -p slam-core --bench area_search`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
