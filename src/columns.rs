@@ -144,8 +144,9 @@ impl fmt::Display for ConfigKind {
 pub enum RunConfig {
     /// noisefree in one of its configurations.
     Ours(ConfigKind),
-    /// noisefree in one of its configurations under readings of the paper
-    /// (`crate::readings`): the kind, and the column's canonical name (`mcor:sightings=all`).
+    /// noisefree in one of its configurations under readings of the paper (parsed and applied
+    /// in `crate::readings`, above this module): the kind, and the column's canonical name
+    /// (`mcor:sightings=all`).
     Reading {
         /// The configuration the readings apply to.
         kind: ConfigKind,
@@ -173,27 +174,5 @@ impl RunConfig {
             RunConfig::Reading { kind, .. } => Some(*kind),
             RunConfig::System(_) => None,
         }
-    }
-
-    /// The column's readings, when it names some.
-    pub fn reading(&self) -> Option<crate::readings::ReadingColumn> {
-        match self {
-            RunConfig::Reading { name, .. } => {
-                crate::readings::ReadingColumn::parse(name).ok().flatten()
-            }
-            _ => None,
-        }
-    }
-
-    /// Parses a column of `--configs`: one of our configurations, with readings or without;
-    /// `None` when `s` names neither (an external system's name, or a mistake).
-    pub fn parse_ours(s: &str) -> Result<Option<RunConfig>> {
-        if let Some(c) = crate::readings::ReadingColumn::parse(s)? {
-            return Ok(Some(RunConfig::Reading {
-                kind: c.kind,
-                name: c.name(),
-            }));
-        }
-        Ok(ConfigKind::parse(s).ok().map(RunConfig::Ours))
     }
 }

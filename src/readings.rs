@@ -5,7 +5,7 @@
 //! (`McorParams::sightings`, `verdict`, `scope`, `depth_normalised`; `AvcParams::gate`,
 //! `b_role`); a column only overlays them on the sweep's configuration.
 
-use crate::columns::ConfigKind;
+use crate::columns::{ConfigKind, RunConfig};
 use anyhow::{bail, Context, Result};
 use slam_core::system::{AvcGate, BaselineRole, Config, Scope, Sightings, Verdict};
 
@@ -180,6 +180,26 @@ impl ReadingColumn {
             c.rgbd_baseline = b.or(c.rgbd_baseline);
         }
     }
+}
+
+/// The readings of a sweep column, when it names some.
+pub fn of(config: &RunConfig) -> Option<ReadingColumn> {
+    match config {
+        RunConfig::Reading { name, .. } => ReadingColumn::parse(name).ok().flatten(),
+        _ => None,
+    }
+}
+
+/// Parses a column of `--configs` that is ours: one of our configurations, with readings or
+/// without; `None` when `s` names neither (an external system's name, or a mistake).
+pub fn parse_column(s: &str) -> Result<Option<RunConfig>> {
+    if let Some(c) = ReadingColumn::parse(s)? {
+        return Ok(Some(RunConfig::Reading {
+            kind: c.kind,
+            name: c.name(),
+        }));
+    }
+    Ok(ConfigKind::parse(s).ok().map(RunConfig::Ours))
 }
 
 /// Sets `key` to `value` in `r`, naming the allowed values when `value` is not one.

@@ -241,7 +241,7 @@ fn request(args: &SweepArgs, catalog: &Catalog) -> Result<SweepRequest> {
         .split(',')
         .map(str::trim)
         .filter(|s| !s.is_empty())
-        .map(|s| match RunConfig::parse_ours(s) {
+        .map(|s| match crate::readings::parse_column(s) {
             Ok(Some(c)) => Ok(c),
             Ok(None) if systems.contains_key(s) => Ok(RunConfig::System(s.to_string())),
             Err(e) => Err(e),

@@ -40,7 +40,7 @@ pub fn job_config(base: &Config, job: &Job) -> Config {
         a.baseline = job.params.baseline.unwrap_or(a.baseline);
         a
     });
-    if let Some(reading) = job.config.reading() {
+    if let Some(reading) = crate::readings::of(&job.config) {
         reading.apply(&mut c, job.params.baseline);
     }
     c

@@ -281,7 +281,7 @@ pub fn expand(
                 continue;
             };
             let mut params = Vec::new();
-            let reading = config.reading();
+            let reading = crate::readings::of(config);
             let own_taus = reading.and_then(|r| r.readings.tau);
             let mcor_grid: Vec<(Option<f64>, Option<f64>, Option<f64>)> =
                 if let Some((a, b, c)) = own_taus {

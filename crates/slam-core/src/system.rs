@@ -34,7 +34,7 @@ use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
 use crate::optimize::{BaConfig, PoseOptConfig};
 use crate::place::{PlaceRecognition, Vocabulary};
 
-use crate::techniques::frame_sightings;
+use crate::module::pose_estimation::frame_sightings;
 pub use crate::techniques::params::{
     AvcGate, AvcParams, BaselineRole, ClusterViews, McorParams, Scope, Sightings, Verdict,
 };

@@ -35,12 +35,13 @@ use crate::optimize::{
 };
 use crate::techniques::mcor_prepared::gate_point;
 use crate::techniques::mcor_prepared::GateMemo;
-use crate::techniques::params::{AvcParams, ClusterViews, McorParams, Verdict};
+use crate::techniques::params::{AvcParams, ClusterViews, McorParams, Sightings, Verdict};
 use crate::techniques::rigid_consensus::{
     nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
 };
 use crate::techniques::{
-    ClusterFeature, McorCluster, McorOutcome, McorVerdict, VirtualCameraRef, VirtualCameraResidual,
+    ClusterFeature, FrameView, McorCluster, McorOutcome, McorVerdict, VirtualCameraRef,
+    VirtualCameraResidual,
 };
 
 /// `t` with its rotation quaternion renormalised. Products of unit quaternions drift off unit
@@ -247,6 +248,46 @@ fn admission(
         }
         McorVerdict::Kept => Admission::Free,
     }
+}
+
+/// The views tracked frame `frame` adds to its map points' clusters, in keypoint order: one
+/// per matched keypoint with depth that ended the frame as an inlier, or, under `sightings =
+/// "all"`, per matched keypoint with depth, chi2 and MC-OR outliers included. Nothing unless
+/// `params` keeps the frame's views ([`McorParams::keeps_views_of`]) and the frame has a pose
+/// and a reference keyframe. Not for a frame made a keyframe: its matches are keyframe
+/// observations already.
+pub fn frame_sightings(
+    frame: &TrackedFrame,
+    map: &Map,
+    camera: &Camera,
+    params: &McorParams,
+) -> Vec<(MapPointId, FrameView)> {
+    if !params.keeps_views_of(frame.id) {
+        return Vec::new();
+    }
+    let (Some(tcw), Some(reference)) = (frame.tcw, frame.reference_kf) else {
+        return Vec::new();
+    };
+    let Some(tkw) = map.keyframe_pose_any(reference) else {
+        return Vec::new();
+    };
+    let twc = tcw.inverse();
+    let mut views = Vec::new();
+    for i in 0..frame.len() {
+        let Some(id) = frame.map_points[i] else {
+            continue;
+        };
+        if frame.outliers[i] && params.sightings == Sightings::Inliers {
+            continue;
+        }
+        let Some(pc) = frame.features.unproject_camera(i, camera) else {
+            continue;
+        };
+        if let Some(view) = FrameView::placed(frame.id, &twc, reference, &tkw, pc) {
+            views.push((id, view));
+        }
+    }
+    views
 }
 
 /// The exact bits of a pose (translation, then quaternion), to tell whether two poses are
@@ -705,8 +746,8 @@ mod tests {
     use super::*;
     use crate::data::KeyFrameId;
     use crate::module::test_map::{scene, scene_with, shifted, twc};
-    use crate::techniques::{frame_sightings, AvcGate, Sightings, FRAME_VIEW_SOURCE_BIT};
     use crate::techniques::{mcor_gate, FrameView, McorMatch, McorVerdict};
+    use crate::techniques::{AvcGate, FRAME_VIEW_SOURCE_BIT};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

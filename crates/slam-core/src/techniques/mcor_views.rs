@@ -3,7 +3,7 @@
 //!
 //! With [`crate::techniques::params::ClusterViews::EveryFrame`], every tracked frame that keeps a
 //! match of a map point as an inlier (under `sightings = "all"`: every matched sighting, outliers
-//! included; see [`frame_sightings`]) and is not made a keyframe (a keyframe's observation is in
+//! included; see `module::pose_estimation::frame_sightings`) and is not made a keyframe (a keyframe's observation is in
 //! the cluster already) stores its 3-D feature on the point. A view is kept relative to the
 //! frame's reference keyframe, so when bundle adjustment or a loop correction moves that
 //! keyframe the view moves with it, as keyframe observations do. Memory is bounded as
@@ -15,49 +15,7 @@ use std::collections::VecDeque;
 use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::mcor::{ClusterFeature, McorCluster, MCOR_CLUSTER_CAPACITY};
-use super::params::{McorParams, Sightings};
-use crate::camera::Camera;
-use crate::data::{KeyFrameId, Map, MapPointId, TrackedFrame};
-
-/// The views tracked frame `frame` adds to its map points' clusters, in keypoint order: one
-/// per matched keypoint with depth that ended the frame as an inlier, or, under `sightings =
-/// "all"`, per matched keypoint with depth, chi2 and MC-OR outliers included. Nothing unless
-/// `params` keeps the frame's views ([`McorParams::keeps_views_of`]) and the frame has a pose
-/// and a reference keyframe. Not for a frame made a keyframe: its matches are keyframe
-/// observations already.
-pub fn frame_sightings(
-    frame: &TrackedFrame,
-    map: &Map,
-    camera: &Camera,
-    params: &McorParams,
-) -> Vec<(MapPointId, FrameView)> {
-    if !params.keeps_views_of(frame.id) {
-        return Vec::new();
-    }
-    let (Some(tcw), Some(reference)) = (frame.tcw, frame.reference_kf) else {
-        return Vec::new();
-    };
-    let Some(tkw) = map.keyframe_pose_any(reference) else {
-        return Vec::new();
-    };
-    let twc = tcw.inverse();
-    let mut views = Vec::new();
-    for i in 0..frame.len() {
-        let Some(id) = frame.map_points[i] else {
-            continue;
-        };
-        if frame.outliers[i] && params.sightings == Sightings::Inliers {
-            continue;
-        }
-        let Some(pc) = frame.features.unproject_camera(i, camera) else {
-            continue;
-        };
-        if let Some(view) = FrameView::placed(frame.id, &twc, reference, &tkw, pc) {
-            views.push((id, view));
-        }
-    }
-    views
-}
+use crate::data::KeyFrameId;
 
 /// Tag of a frame view's `source` in a cluster (keyframe ids and the current frame's tag never
 /// carry this bit), so views never collide with keyframe observations.

@@ -34,7 +34,7 @@ pub use mcor::{
     FeatureMetrics, McorCluster, McorMatch, McorMetrics, McorOutcome, McorSelection, McorVerdict,
     SightingsJudgement, MCOR_CLUSTER_CAPACITY,
 };
-pub use mcor_views::{frame_sightings, FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
+pub use mcor_views::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
 pub use params::{
     AvcAim, AvcGate, AvcParams, BaselineRole, ClusterViews, McorParams, Scope, Sightings, Verdict,
 };
