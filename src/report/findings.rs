@@ -390,6 +390,94 @@ fn axis_findings(
     totals
 }
 
+/// The readings (issue 72): every comparison of a column that names readings of the paper,
+/// the ones that survive Holm listed with their intervals beside the paper's gain. Returns the
+/// glance's clause.
+fn readings_findings(
+    md: &mut String,
+    rows: &[VersusRow],
+    catalog: &Catalog,
+    base: &Path,
+) -> Option<String> {
+    let read: Vec<&VersusRow> = rows
+        .iter()
+        .filter(|r| r.diff_pct.is_some())
+        .filter(|r| {
+            matches!(
+                crate::readings::ReadingColumn::parse(&r.config),
+                Ok(Some(_))
+            )
+        })
+        .collect();
+    if read.is_empty() {
+        return None;
+    }
+    md.push_str(
+        "### The readings of what the paper leaves unsaid\n\nThe paper's techniques under \
+         each reading of a choice it does not make (which sightings form a cluster, who decides, \
+         where MC-OR acts, AVC's gate and what b is; docs/readings.md), against the baseline on \
+         the same runs. Each folder's Holm correction counts every reading it tried.\n\n",
+    );
+    let survivors: Vec<&&VersusRow> = read.iter().filter(|r| r.survives()).collect();
+    let (lower, higher): (Vec<&&&VersusRow>, Vec<&&&VersusRow>) = survivors
+        .iter()
+        .partition(|r| r.diff_pct.is_some_and(|d| d.0 < 0.0));
+    if survivors.is_empty() {
+        md.push_str("No reading differs from the baseline after Holm.\n\n");
+    } else {
+        md.push_str("| Table | Sequence | Column | Against the baseline [95 % CI] | Holm p | The paper |\n|---|---|---|---|---|---|\n");
+        for r in &survivors {
+            let kind = crate::readings::ReadingColumn::parse(&r.config)
+                .ok()
+                .flatten()
+                .map(|c| c.kind.name())
+                .unwrap_or_default();
+            let paper = paper_gain(catalog, &r.sequence, kind)
+                .map_or("-".to_string(), |(row, g)| format!("{g:+.0} % ({row})"));
+            let _ = writeln!(
+                md,
+                "| {} | {} | `{}` | {} | {:.3} | {paper} |",
+                link(base, &r.folder, "readings.md"),
+                r.sequence,
+                r.config,
+                diff_text(r.diff_pct.expect("filtered")),
+                r.p_holm.unwrap_or(f64::NAN),
+            );
+        }
+        md.push('\n');
+    }
+    let _ = writeln!(
+        md,
+        "{} comparisons of readings: {} with a lower ATE than the baseline after Holm, {} with a \
+         higher one, the rest not told apart.\n",
+        read.len(),
+        lower.len(),
+        higher.len()
+    );
+    let named: Vec<String> = lower
+        .iter()
+        .map(|r| {
+            format!(
+                "`{}` on {} {}",
+                r.config,
+                r.sequence,
+                diff_text(r.diff_pct.expect("filtered"))
+            )
+        })
+        .collect();
+    Some(format!(
+        "{} comparisons: **{} lower ATE after Holm**{}, {} higher",
+        read.len(),
+        lower.len(),
+        if named.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", named.join("; "))
+        },
+        higher.len()
+    ))
+}
+
 /// Table I: AVC against the baseline at each b.
 fn table1_findings(md: &mut String, rows: &[VersusRow], base: &Path) {
     md.push_str(
@@ -823,6 +911,7 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
         "depth-axial",
         uses_avc,
     );
+    let readings = readings_findings(&mut md, &rows, catalog, base);
     table1_findings(&mut md, &rows, base);
     table2_findings(&mut md, dirs, base)?;
     table4_findings(&mut md, dirs, base)?;
@@ -834,14 +923,17 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
          - Table III on the twins, MC-OR, AVC and both against ORB-SLAM2, unperturbed: {}.\n\
          - The same under a real camera's systematic errors: {}.\n\
          - Under depth noise: MC-OR against lateral noise, {} of {} comparisons gain; AVC \
-         against axial noise, {} of {} comparisons gain.\n",
+         against axial noise, {} of {} comparisons gain.\n{}",
         results_readme(base),
         plain.sentence(),
         chained.sentence(),
         lateral.1,
         lateral.0,
         axial.1,
-        axial.0
+        axial.0,
+        readings.map_or(String::new(), |r| format!(
+            "- The readings of what the paper leaves unsaid (docs/readings.md): {r}.\n"
+        ))
     );
     Ok(Findings { full: md, glance })
 }
@@ -918,6 +1010,56 @@ pub fn splice(text: &str, findings: &Findings) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn reading_row(seq: &str, config: &str, d: f64, p_holm: f64) -> VersusRow {
+        VersusRow {
+            folder: PathBuf::from("results/readings/x"),
+            sequence: seq.into(),
+            perturbation: "none".into(),
+            axis: None,
+            config: config.into(),
+            taus: None,
+            b: None,
+            runs: 10,
+            failed: 0,
+            mean: Some(0.1),
+            std: Some(0.01),
+            diff_pct: Some((d, d - 3.0, d + 3.0)),
+            test: "paired_t".into(),
+            p_holm: Some(p_holm),
+        }
+    }
+
+    #[test]
+    fn the_readings_findings_list_what_survives_holm_and_count_the_rest() {
+        let catalog = Catalog::embedded();
+        let rows = [
+            reading_row("twin_fr3_w_static", "mcor:verdict=consensus", -60.0, 0.003),
+            reading_row("twin_fr2_coke", "mcor:verdict=consensus", 29.0, 0.001),
+            reading_row("twin_fr2_coke", "mcor:sightings=all", 1.0, 0.9),
+            reading_row("twin_fr2_coke", "mcor", -1.0, 0.001),
+        ];
+        let mut md = String::new();
+        let glance = readings_findings(&mut md, &rows, &catalog, Path::new("results")).unwrap();
+        assert!(md.contains("| twin_fr3_w_static | `mcor:verdict=consensus` | -60.0 % [-63.0, -57.0] | 0.003 | -96 % (fr3_w_static) |"), "{md}");
+        assert!(
+            !md.contains("`mcor:sightings=all`"),
+            "not told apart: counted, not listed"
+        );
+        assert!(
+            md.contains("3 comparisons of readings: 1 with a lower ATE"),
+            "{md}"
+        );
+        assert!(
+            glance.starts_with("3 comparisons: **1 lower ATE after Holm**"),
+            "{glance}"
+        );
+        assert!(glance.ends_with(", 1 higher"), "{glance}");
+        // Without reading columns there is nothing to say.
+        assert!(
+            readings_findings(&mut String::new(), &rows[3..], &catalog, Path::new("r")).is_none()
+        );
+    }
 
     #[test]
     fn variance_ratio_matches_scipy() {
