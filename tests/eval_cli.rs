@@ -129,6 +129,52 @@ fn fr2_desk() -> Option<PathBuf> {
     d.is_dir().then_some(d)
 }
 
+/// RPE's two conventions on the real fr2_desk files, under evo's association (nearest stamp
+/// within 0.01 s): `--rpe-pairs all` is evo_rpe's `--all_pairs` (and TUM's evaluate_rpe.py's
+/// overlapping samples), `--rpe-pairs consecutive` evo_rpe's default. The figures were taken
+/// once from evo 1.38.1 (`metrics.RPE(translation_part, delta=30, frames, all_pairs)` after
+/// `sync.associate_trajectories(max_diff=0.01)`).
+#[test]
+fn rpe_pairs_give_evo_rpe_s_two_conventions_on_the_real_fr2_desk_files() {
+    let Some(d) = fr2_desk() else {
+        eprintln!("skipping: ../shared/data/tum_fr2_desk not present");
+        return;
+    };
+    let gt = d.join("groundtruth.txt");
+    let est = d.join("orbslam2_rgbd.txt");
+    for (pairs, rmse, samples) in [
+        ("all", 0.007701977181680654, 2144),
+        ("consecutive", 0.007843758497117352, 72),
+    ] {
+        let out = noisefree(&[
+            "eval",
+            gt.to_str().unwrap(),
+            est.to_str().unwrap(),
+            "--assoc",
+            "evo",
+            "--max-diff",
+            "0.01",
+            "--rpe-frames",
+            "30",
+            "--rpe-pairs",
+            pairs,
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let t = &v["rpe"]["trans_m"];
+        assert!(
+            (t["rmse"].as_f64().unwrap() - rmse).abs() < 1e-9,
+            "{pairs}: {t}"
+        );
+        assert_eq!(t["count"].as_u64().unwrap(), samples, "{pairs}");
+    }
+}
+
 /// The real TUM fr2_desk ground truth as distributed (a repeated stamp at line 10863) and an
 /// ORB-SLAM2 estimate: scored as evaluate_ate.py and evo_ape score them (figures from those
 /// tools, crates/ate-eval/tests/fixtures/expected_fr2_desk.json), with one warning line.

@@ -51,3 +51,9 @@ if [ -n "${READINGS:-}" ]; then
     --quiet --out results/readings/all-rows
   "$NF" table --paper results/readings/all-rows
 fi
+# 1b. What the interim screening (its two complete rows) found differing from the baseline,
+#     again on fresh draws (seeds 10..19), so no comparison reuses the draws that chose it.
+"$NF" sweep --seq twin_fr3_w_static,twin_fr2_coke \
+  --configs orb,mcor:verdict=consensus,avc:b_role=camera --runs 10 --first-seed 10 \
+  --mapping-lag 3 --quiet --out results/readings/confirm-fresh
+"$NF" table --paper results/readings/confirm-fresh

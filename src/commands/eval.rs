@@ -4,7 +4,8 @@
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{self, Format};
 use ate_eval::{
-    evaluate_ate, evaluate_rpe, AlignmentMode, AssociationMode, AteOptions, RpeDelta, StampPolicy,
+    evaluate_ate, evaluate_rpe_with, AlignmentMode, AssociationMode, AteOptions, RpeDelta,
+    RpePairs, StampPolicy,
 };
 use serde_json::json;
 use std::path::PathBuf;
@@ -83,6 +84,11 @@ pub struct EvalArgs {
     /// Also compute the RPE over this time delta, in seconds.
     #[arg(long = "rpe-seconds", value_name = "S")]
     pub rpe_seconds: Option<f64>,
+    /// The RPE's samples: `all` (one from every pose, overlapping: TUM's evaluate_rpe.py and
+    /// evo's --all_pairs) or `consecutive` (back to back, each starting where the previous
+    /// ended: evo_rpe's default).
+    #[arg(long = "rpe-pairs", value_name = "all|consecutive", default_value = "all", value_parser = ["all", "consecutive"])]
+    pub rpe_pairs: String,
     /// Write the aligned estimate (TUM format) to this file.
     #[arg(long = "save-aligned", value_name = "FILE")]
     pub save_aligned: Option<PathBuf>,
@@ -163,7 +169,11 @@ pub fn run(args: EvalArgs) -> Result<()> {
     };
     let rpe = delta
         .map(|d| {
-            evaluate_rpe(&gt.trajectory, &est_traj, d, &opts).with_context(|| {
+            let pairs = match args.rpe_pairs.as_str() {
+                "consecutive" => RpePairs::Consecutive,
+                _ => RpePairs::All,
+            };
+            evaluate_rpe_with(&gt.trajectory, &est_traj, d, pairs, &opts).with_context(|| {
                 format!(
                     "relative pose error of {} against {}",
                     args.est.display(),

@@ -27,7 +27,7 @@ pub use align::{umeyama, Alignment, AlignmentMode};
 pub use associate::{associate, AssociationMode};
 pub use ate::{evaluate_ate, AteOptions, AteResult};
 pub use error::{Error, Warning};
-pub use rpe::{evaluate_rpe, RpeDelta, RpeResult};
+pub use rpe::{evaluate_rpe, evaluate_rpe_with, RpeDelta, RpePairs, RpeResult};
 pub use stamps::StampPolicy;
 pub use stats::ErrorStats;
 pub use trajectory::Trajectory;

@@ -20,6 +20,17 @@ pub enum RpeDelta {
     Seconds(f64),
 }
 
+/// Which samples over the step are taken: every pose's (TUM's evaluate_rpe.py, evo's
+/// `--all_pairs`) or back-to-back ones, each starting where the previous ended (evo's default).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RpePairs {
+    /// A sample from every associated pose: overlapping. The default.
+    #[default]
+    All,
+    /// Non-overlapping samples: the next one starts at the previous one's end pose.
+    Consecutive,
+}
+
 /// Translational and rotational relative error statistics.
 #[derive(Clone, Debug)]
 pub struct RpeResult {
@@ -33,11 +44,23 @@ pub struct RpeResult {
     pub rot_errors: Vec<f64>,
 }
 
-/// Computes the RPE of `est` against `gt` over `delta`.
+/// Computes the RPE of `est` against `gt` over `delta`, a sample from every pose
+/// ([`RpePairs::All`]).
 pub fn evaluate_rpe(
     gt: &Trajectory,
     est: &Trajectory,
     delta: RpeDelta,
+    opts: &AteOptions,
+) -> Result<RpeResult> {
+    evaluate_rpe_with(gt, est, delta, RpePairs::All, opts)
+}
+
+/// [`evaluate_rpe`] with the samples `pairs` says.
+pub fn evaluate_rpe_with(
+    gt: &Trajectory,
+    est: &Trajectory,
+    delta: RpeDelta,
+    pairs_taken: RpePairs,
     opts: &AteOptions,
 ) -> Result<RpeResult> {
     let pairs = associate(
@@ -74,7 +97,7 @@ pub fn evaluate_rpe(
     let mut trans_errors = Vec::new();
     let mut rot_errors = Vec::new();
     let stamps: Vec<f64> = pairs.iter().map(|&(i, _)| gt.stamps[i]).collect();
-    for (a, b) in steps(&stamps, delta) {
+    for (a, b) in taken(steps(&stamps, delta), pairs_taken) {
         let (gi, ei) = pairs[a];
         let (gj, ej) = pairs[b];
         let rel_gt = gt.poses[gi].inverse() * gt.poses[gj];
@@ -110,6 +133,23 @@ pub fn evaluate_rpe(
         trans_errors,
         rot_errors,
     })
+}
+
+/// Of the samples `all` (in order of their first pose), those `pairs` takes: every one, or
+/// back to back (the first, then the first starting at or after the previous one's end).
+fn taken(all: Vec<(usize, usize)>, pairs: RpePairs) -> Vec<(usize, usize)> {
+    match pairs {
+        RpePairs::All => all,
+        RpePairs::Consecutive => {
+            let mut out: Vec<(usize, usize)> = Vec::new();
+            for (a, b) in all {
+                if out.last().is_none_or(|&(_, end)| a >= end) {
+                    out.push((a, b));
+                }
+            }
+            out
+        }
+    }
 }
 
 /// The samples `(a, b)` of pair indices over `delta`, for pairs whose ground-truth stamps are
@@ -154,6 +194,17 @@ fn steps(stamps: &[f64], delta: RpeDelta) -> Vec<(usize, usize)> {
 mod tests {
     use super::*;
     use nalgebra::{Translation3, UnitQuaternion};
+
+    #[test]
+    fn consecutive_samples_start_where_the_previous_ended() {
+        let stamps: Vec<f64> = (0..7).map(f64::from).collect();
+        let all = steps(&stamps, RpeDelta::Frames(2));
+        assert_eq!(all, [(0, 2), (1, 3), (2, 4), (3, 5), (4, 6)]);
+        assert_eq!(taken(all.clone(), RpePairs::All), all);
+        assert_eq!(taken(all, RpePairs::Consecutive), [(0, 2), (2, 4), (4, 6)]);
+        let over_seconds = steps(&stamps, RpeDelta::Seconds(2.5));
+        assert_eq!(taken(over_seconds, RpePairs::Consecutive), [(0, 3), (3, 6)]);
+    }
 
     /// The samples as found until issue 45: over seconds, a scan from pair a + 1 for every a
     /// (quadratic when `s` spans many pairs).
