@@ -62,3 +62,15 @@ fn the_results_report_agrees_with_the_committed_tables() {
     noisefree_ok(&["report", "--check", "results/README.md"]);
     noisefree_ok(&["report", "--check", "README.md"]);
 }
+
+#[test]
+fn report_write_creates_a_new_file_with_its_findings() {
+    let dir = common::tmpdir("report-new");
+    let file = dir.join("findings.md");
+    let f = file.to_str().unwrap();
+    noisefree_ok(&["report", "--write", f, "results/table3-twins"]);
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.contains("## Findings"), "{text}");
+    noisefree_ok(&["report", "--check", f, "results/table3-twins"]);
+    let _ = std::fs::remove_dir_all(dir);
+}

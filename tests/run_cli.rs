@@ -308,3 +308,27 @@ fn a_missing_ground_truth_is_named_as_such_and_the_ate_has_three_digits() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+#[test]
+fn a_run_that_replaces_an_earlier_runs_files_says_so() {
+    let out = tmpdir("replace");
+    let run = || {
+        noisefree_ok(&[
+            "run",
+            "--frames",
+            "20",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let first = run();
+    assert!(!String::from_utf8_lossy(&first.stderr).contains("replaced"));
+    let second = run();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(
+        err.contains("note: replaced the files of an earlier run in"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(out);
+}

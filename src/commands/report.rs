@@ -80,8 +80,17 @@ pub fn run(args: ReportArgs) -> Result<()> {
     let md = findings(&dirs, &base, &Catalog::embedded())?;
     match (&args.write, &args.check) {
         (Some(file), _) => {
-            let text = std::fs::read_to_string(file)
-                .with_context(|| format!("reading {}", file.display()))?;
+            // A new file gets a findings block to fill.
+            let text = if file.exists() {
+                std::fs::read_to_string(file)
+                    .with_context(|| format!("reading {}", file.display()))?
+            } else {
+                format!(
+                    "{}\n{}\n",
+                    crate::report::findings::BEGIN,
+                    crate::report::findings::END
+                )
+            };
             let out = splice(&text, &md).with_context(|| file.display().to_string())?;
             write_atomic(file, out.as_bytes())?;
             eprintln!(

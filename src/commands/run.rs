@@ -139,8 +139,21 @@ pub fn run(args: RunArgs) -> Result<()> {
     }
     let vocabulary = vocabulary.vocabulary.as_ref();
     let results = run_seeds(&loaded, &config, vocabulary, &seeds, args.jobs, args.quiet)?;
+    // An earlier run's files in the folder (its summary, or a multi-run's per-seed ones) are
+    // replaced: said, so that a default `--out` never overwrites a result silently.
+    let earlier = out.join("summary.json").exists()
+        || seeds
+            .iter()
+            .any(|s| out.join(format!("seed{s}")).join("summary.json").exists());
     let summaries = record(&loaded, cname, &results, &chain, args.perturb_seed, &out)?;
-    summarise(&label, cname, &results, summaries, &out)
+    summarise(&label, cname, &results, summaries, &out)?;
+    if earlier {
+        eprintln!(
+            "note: replaced the files of an earlier run in {} (--out DIR keeps each run apart)",
+            out.display()
+        );
+    }
+    Ok(())
 }
 
 /// Parses `--mcor-cluster`.

@@ -970,19 +970,46 @@ pub const GLANCE_END: &str = "<!-- glance: end -->";
 /// `text` with the block between `begin` and `end` replaced by `body`; `None` when `begin` is
 /// not in `text`, an error when it is not closed.
 fn splice_block(text: &str, begin: &str, end: &str, body: &str) -> Result<Option<String>> {
-    let Some(i) = text.find(begin) else {
+    let Some((i, after_begin)) = marker_line(text, 0, begin) else {
         return Ok(None);
     };
-    let j = text[i..]
-        .find(end)
-        .map(|j| i + j)
+    let (j, after_end) = marker_line(text, after_begin, end)
         .with_context(|| format!("a block is not closed (`{end}`)"))?;
+    let terminator = if text[j..after_end].ends_with('\n') {
+        "\n"
+    } else {
+        ""
+    };
     Ok(Some(format!(
-        "{}{begin}\n{}\n{}",
+        "{}{begin}\n{}\n{end}{terminator}{}",
         &text[..i],
         body.trim_end(),
-        &text[j..]
+        &text[after_end..]
     )))
+}
+
+/// The first line at or after byte `from` of `text` that is the marker `marker` as a person may
+/// type it (spaces anywhere, any words after its name, `-->` closing it): its start, and the
+/// byte after it.
+fn marker_line(text: &str, from: usize, marker: &str) -> Option<(usize, usize)> {
+    let squash = |s: &str| s.chars().filter(|c| !c.is_whitespace()).collect::<String>();
+    // `<!-- findings: begin (generated ...) -->` is known by `<!--findings:begin`.
+    let key = squash(
+        marker
+            .split(" (")
+            .next()
+            .unwrap_or(marker)
+            .trim_end_matches("-->"),
+    );
+    let mut at = from;
+    for line in text[from..].split_inclusive('\n') {
+        let s = squash(line);
+        if s.starts_with(&key) && s.ends_with("-->") {
+            return Some((at, at + line.len()));
+        }
+        at += line.len();
+    }
+    None
 }
 
 /// `text` with its findings block and its glance block (whichever it has) replaced; an error
@@ -1205,5 +1232,21 @@ mod tests {
         );
         assert!(splice("no block", &f).is_err());
         assert!(splice(&format!("{BEGIN}\nnever closed"), &f).is_err());
+    }
+
+    #[test]
+    fn markers_are_known_as_a_person_types_them() {
+        let f = Findings {
+            full: "## Findings\n".into(),
+            glance: "g\n".into(),
+        };
+        // Without the note in brackets, spaced differently: the canonical lines come back.
+        let typed = "a\n<!--findings: begin -->\nold\n  <!-- findings:end-->\nb";
+        assert_eq!(
+            splice(typed, &f).unwrap(),
+            format!("a\n{BEGIN}\n## Findings\n{END}\nb")
+        );
+        // A line that merely mentions the marker is not one.
+        assert!(splice("see <!-- findings: begin --> in text\n", &f).is_err());
     }
 }
