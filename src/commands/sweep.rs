@@ -213,6 +213,9 @@ pub fn run(args: SweepArgs) -> Result<()> {
     if let Some(note) = crate::sweep::spread::identical_note(&records) {
         eprintln!("{note}");
     }
+    if let Some(note) = crate::sweep::spread::failures_note(&records) {
+        eprintln!("{note}");
+    }
     if !args.quiet {
         eprintln!(
             "{} runs finished in {:.1} s, {}; records in {}",

@@ -66,6 +66,46 @@ pub fn identical_note(records: &[RunRecord]) -> Option<String> {
     ))
 }
 
+/// What a sweep says at its end about runs without a result: failed runs counted by
+/// configuration and reason, and runs with no ATE because their sequence has no ground truth
+/// (not failures); `None` when every run has an ATE.
+pub fn failures_note(records: &[RunRecord]) -> Option<String> {
+    let mut reasons: BTreeMap<(String, String), usize> = BTreeMap::new();
+    for r in records.iter().filter(|r| r.failed) {
+        let why = r
+            .reason
+            .clone()
+            .unwrap_or_else(|| "fewer than 80 % of the frames tracked".into());
+        *reasons.entry((r.config.clone(), why)).or_default() += 1;
+    }
+    let no_truth = records
+        .iter()
+        .filter(|r| !r.failed && r.ate_rmse.is_none())
+        .count();
+    if reasons.is_empty() && no_truth == 0 {
+        return None;
+    }
+    let mut parts = Vec::new();
+    if !reasons.is_empty() {
+        let failed: usize = reasons.values().sum();
+        let list: Vec<String> = reasons
+            .iter()
+            .map(|((config, why), n)| format!("{n} {config}: {why}"))
+            .collect();
+        parts.push(format!(
+            "{failed} of the folder's {} runs failed ({})",
+            records.len(),
+            list.join("; ")
+        ));
+    }
+    if no_truth > 0 {
+        parts.push(format!(
+            "{no_truth} ran without an ATE: their sequence has no ground truth (not a failure)"
+        ));
+    }
+    Some(format!("note: {}.", parts.join("; ")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,5 +126,25 @@ mod tests {
         let note = identical_note(&records).unwrap();
         assert!(note.contains("in 1 of the 2 cells") && note.contains("--mapping-lag 3"));
         assert!(identical_note(&records[2..]).is_none());
+    }
+
+    #[test]
+    fn failures_are_counted_by_reason_and_a_missing_ground_truth_kept_apart() {
+        let mut failed = RunRecord::example("kinect", "orb", 0, 0.01);
+        failed.failed = true;
+        let mut crashed = RunRecord::example("kinect", "myslam", 0, 0.01);
+        (crashed.failed, crashed.reason) = (true, Some("exit status 3".into()));
+        let mut no_truth = RunRecord::example("mine", "orb", 0, 0.01);
+        no_truth.ate_rmse = None;
+        let ok = RunRecord::example("kinect", "orb", 1, 0.01);
+        let note = failures_note(&[failed, crashed, no_truth, ok.clone()]).unwrap();
+        assert!(note.contains("2 of the folder's 4 runs failed"), "{note}");
+        assert!(note.contains("1 myslam: exit status 3"), "{note}");
+        assert!(
+            note.contains("1 orb: fewer than 80 % of the frames tracked"),
+            "{note}"
+        );
+        assert!(note.contains("1 ran without an ATE: their sequence has no ground truth"));
+        assert!(failures_note(&[ok]).is_none());
     }
 }
