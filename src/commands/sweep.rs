@@ -115,7 +115,8 @@ pub struct SweepArgs {
     /// `depth-axial:1+exposure:5`), the axes' members added after it.
     #[arg(long = "perturb-with", value_name = "CHAIN")]
     pub perturb_with: Option<String>,
-    /// Seed of the perturbations' random draws (every run of a point sees one perturbed copy).
+    /// Seed of the perturbations' random draws: run k of every point and system draws seed S + k
+    /// (paired across systems), or every run seed S under --perturb-shared.
     #[arg(long = "perturb-seed", default_value_t = 0, value_name = "S")]
     pub perturb_seed: u64,
     /// Every run of a point sees one and the same perturbation draw (seed --perturb-seed).
