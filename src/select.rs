@@ -72,6 +72,13 @@ pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Se
     Ok(seq)
 }
 
+/// Tells the user, on one line, which camera folder `dir` is read with and where it came from
+/// (a warning when nothing stands behind it): a camera is never assumed silently.
+fn say_camera(dir: &Path, settings: Option<&Path>) {
+    let origin = datasets::CameraOrigin::of(dir, settings);
+    eprintln!("{}", origin.describe(dir));
+}
+
 /// Opens the sequence of `source`: camera, ground truth and frame list now, the frames when the
 /// reader reads (or renders) them; `seq.frames` stays empty. With `--frames N` the reader
 /// holds the first N frames.
@@ -81,11 +88,15 @@ pub fn open(
     opts: &LoadOptions,
 ) -> Result<(Sequence, FrameReader)> {
     let (seq, mut frames) = match source {
-        Source::Path(p) => match &opts.camera {
-            None => datasets::open_path(p),
-            Some(c) => datasets::open_path_with_settings(p, c),
+        Source::Path(p) => {
+            let opened = match &opts.camera {
+                None => datasets::open_path(p),
+                Some(c) => datasets::open_path_with_settings(p, c),
+            }
+            .with_context(|| format!("loading {}", p.display()))?;
+            say_camera(p, opts.camera.as_deref());
+            opened
         }
-        .with_context(|| format!("loading {}", p.display()))?,
         Source::Catalog(name) => {
             let entry = catalog.get(name)?;
             if let Some(preset) = &entry.preset {
@@ -130,6 +141,7 @@ pub fn open(
                     Some(c) => datasets::open_path_with_settings(&dir, c),
                 }
                 .with_context(|| format!("loading {}", dir.display()))?;
+                say_camera(&dir, opts.camera.as_deref());
                 s.name = entry.name.clone();
                 (s, frames)
             }

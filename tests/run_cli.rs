@@ -332,3 +332,42 @@ fn a_run_that_replaces_an_earlier_runs_files_says_so() {
     );
     let _ = std::fs::remove_dir_all(out);
 }
+
+#[test]
+fn the_camera_of_a_folder_is_said_and_a_guess_is_a_warning_saying_how_to_give_it() {
+    let root = tmpdir("camera-said");
+    let named = root.join("rgbd_dataset_freiburg1_mine");
+    noisefree_ok(&[
+        "synth",
+        "--preset",
+        "twin_fr1_xyz",
+        "--frames",
+        "12",
+        "--out",
+        named.to_str().unwrap(),
+    ]);
+    let run = |dir: &std::path::Path| {
+        noisefree_ok(&[
+            "run",
+            "--path",
+            dir.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            root.join("out").to_str().unwrap(),
+        ])
+    };
+    let said = String::from_utf8_lossy(&run(&named).stderr).into_owned();
+    assert!(
+        said.contains("TUM Fr1's") && said.contains("from the folder's name"),
+        "{said}"
+    );
+    let bare = root.join("mine");
+    std::fs::rename(&named, &bare).unwrap();
+    let warned = String::from_utf8_lossy(&run(&bare).stderr).into_owned();
+    assert!(
+        warned.contains("warning:") && warned.contains("assuming freiburg3's"),
+        "{warned}"
+    );
+    assert!(warned.contains("--camera FILE.yaml"), "{warned}");
+    let _ = std::fs::remove_dir_all(root);
+}

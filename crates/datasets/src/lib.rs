@@ -92,6 +92,74 @@ pub fn open_path_with_settings(
     }
 }
 
+/// Where the camera of a folder comes from when it is opened: what a command tells its user,
+/// so that a camera is never assumed silently.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum CameraOrigin {
+    /// An ORB-SLAM2 / ORB-SLAM3 settings file given with the folder (`--camera`).
+    Settings(std::path::PathBuf),
+    /// A TUM folder whose name says its freiburg camera.
+    TumName(CameraId),
+    /// A TUM folder whose name says no freiburg camera: freiburg3's is assumed.
+    TumGuess,
+    /// An EuRoC folder's `sensor.yaml` files.
+    EurocSensorFiles,
+}
+
+impl CameraOrigin {
+    /// The origin of the camera of folder `dir`, opened with the settings file `settings` if any.
+    pub fn of(dir: &Path, settings: Option<&Path>) -> CameraOrigin {
+        if let Some(s) = settings {
+            return CameraOrigin::Settings(s.to_path_buf());
+        }
+        match detect_format(dir) {
+            Some(Format::EurocStereo) => CameraOrigin::EurocSensorFiles,
+            _ => match CameraId::detect_tum(&tum::folder_name(dir)) {
+                Some(id) => CameraOrigin::TumName(id),
+                None => CameraOrigin::TumGuess,
+            },
+        }
+    }
+
+    /// Whether nothing stands behind the camera (a guess).
+    pub fn is_guess(&self) -> bool {
+        *self == CameraOrigin::TumGuess
+    }
+
+    /// One line for the user: the camera and where it came from; for a guess, how to give it.
+    pub fn describe(&self, dir: &Path) -> String {
+        match self {
+            CameraOrigin::Settings(s) => {
+                format!("camera of {}: from {}", dir.display(), s.display())
+            }
+            CameraOrigin::TumName(id) => format!(
+                "camera of {}: TUM {id:?}'s (ORB-SLAM2's TUM settings and depth factor), from the \
+                 folder's name",
+                dir.display()
+            ),
+            CameraOrigin::EurocSensorFiles => format!(
+                "camera of {}: from its sensor.yaml files (EuRoC)",
+                dir.display()
+            ),
+            CameraOrigin::TumGuess => {
+                let written = ["camera-orbslam2.yaml", "camera-orbslam3.yaml"]
+                    .iter()
+                    .map(|f| dir.join(f))
+                    .find(|p| p.is_file());
+                format!(
+                    "warning: {} names no TUM camera (freiburg1/2/3): assuming freiburg3's \
+                     intrinsics and depth factor; give the camera with --camera FILE.yaml{}",
+                    dir.display(),
+                    match written {
+                        Some(p) => format!(" (this folder has one: --camera {})", p.display()),
+                        None => " (`noisefree settings` writes one)".to_string(),
+                    }
+                )
+            }
+        }
+    }
+}
+
 /// Loads any TUM RGB-D or EuRoC folder with default options, detecting its layout.
 pub fn load_path(dir: &Path) -> Result<Sequence, DatasetError> {
     let (mut seq, frames) = open_path(dir)?;
