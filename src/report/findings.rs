@@ -48,6 +48,8 @@ pub struct VersusRow {
     pub test: String,
     /// Holm-corrected p-value.
     pub p_holm: Option<f64>,
+    /// The test's p-value before any correction.
+    pub p: Option<f64>,
 }
 
 impl VersusRow {
@@ -113,6 +115,7 @@ pub fn read_versus(dir: &Path) -> Result<Vec<VersusRow>> {
             diff_pct: diff,
             test: field(&r, &h, "test").unwrap_or_default(),
             p_holm: number(&r, &h, "p_holm"),
+            p: number(&r, &h, "p"),
         });
     }
     Ok(out)
@@ -399,34 +402,61 @@ fn readings_findings(
     catalog: &Catalog,
     base: &Path,
 ) -> Option<String> {
-    let read: Vec<&VersusRow> = rows
+    let is_reading = |r: &VersusRow| {
+        matches!(
+            crate::readings::ReadingColumn::parse(&r.config),
+            Ok(Some(_))
+        )
+    };
+    // The study: every comparison of every folder that tried a reading, corrected together
+    // (trying many readings, and confirming one, are comparisons too).
+    let folders: std::collections::BTreeSet<&PathBuf> = rows
         .iter()
-        .filter(|r| r.diff_pct.is_some())
-        .filter(|r| {
-            matches!(
-                crate::readings::ReadingColumn::parse(&r.config),
-                Ok(Some(_))
-            )
-        })
+        .filter(|r| is_reading(r))
+        .map(|r| &r.folder)
         .collect();
-    if read.is_empty() {
+    let study: Vec<&VersusRow> = rows
+        .iter()
+        .filter(|r| folders.contains(&r.folder) && r.diff_pct.is_some() && r.p.is_some())
+        .collect();
+    if !study.iter().any(|r| is_reading(r)) {
         return None;
     }
-    md.push_str(
+    let p: Vec<f64> = study.iter().map(|r| r.p.expect("filtered")).collect();
+    let adjusted = crate::report::stats::holm(&p);
+    let read: Vec<(&VersusRow, f64)> = study
+        .iter()
+        .zip(&adjusted)
+        .filter(|(r, _)| is_reading(r))
+        .map(|(r, p)| (*r, *p))
+        .collect();
+    let _ = write!(
+        md,
         "### The readings of what the paper leaves unsaid\n\nThe paper's techniques under \
          each reading of a choice it does not make (which sightings form a cluster, who decides, \
          where MC-OR acts, AVC's gate and what b is; docs/readings.md), against the baseline on \
-         the same runs. Each folder's Holm correction counts every reading it tried.\n\n",
+         the same runs. Holm's correction here runs over the whole study: all {} comparisons of \
+         the {} folders that tried a reading, so trying many readings, and confirming one on \
+         fresh draws, are counted.\n\n",
+        study.len(),
+        folders.len()
     );
-    let survivors: Vec<&&VersusRow> = read.iter().filter(|r| r.survives()).collect();
-    let (lower, higher): (Vec<&&&VersusRow>, Vec<&&&VersusRow>) = survivors
+    let survivors: Vec<(&VersusRow, f64)> =
+        read.iter().copied().filter(|(_, p)| *p <= ALPHA).collect();
+    let lower: Vec<(&VersusRow, f64)> = survivors
         .iter()
-        .partition(|r| r.diff_pct.is_some_and(|d| d.0 < 0.0));
+        .copied()
+        .filter(|(r, _)| r.diff_pct.is_some_and(|d| d.0 < 0.0))
+        .collect();
+    let higher = survivors.len() - lower.len();
     if survivors.is_empty() {
-        md.push_str("No reading differs from the baseline after Holm.\n\n");
+        md.push_str("No reading differs from the baseline after Holm over the study.\n\n");
     } else {
-        md.push_str("| Table | Sequence | Column | Against the baseline [95 % CI] | Holm p | The paper |\n|---|---|---|---|---|---|\n");
-        for r in &survivors {
+        md.push_str(
+            "| Table | Sequence | Column | Against the baseline [95 % CI] | Holm p (study) | \
+             The paper |\n|---|---|---|---|---|---|\n",
+        );
+        for (r, p) in &survivors {
             let kind = crate::readings::ReadingColumn::parse(&r.config)
                 .ok()
                 .flatten()
@@ -436,27 +466,25 @@ fn readings_findings(
                 .map_or("-".to_string(), |(row, g)| format!("{g:+.0} % ({row})"));
             let _ = writeln!(
                 md,
-                "| {} | {} | `{}` | {} | {:.3} | {paper} |",
+                "| {} | {} | `{}` | {} | {p:.3} | {paper} |",
                 link(base, &r.folder, "readings.md"),
                 r.sequence,
                 r.config,
                 diff_text(r.diff_pct.expect("filtered")),
-                r.p_holm.unwrap_or(f64::NAN),
             );
         }
         md.push('\n');
     }
     let _ = writeln!(
         md,
-        "{} comparisons of readings: {} with a lower ATE than the baseline after Holm, {} with a \
-         higher one, the rest not told apart.\n",
+        "{} comparisons of readings: {} with a lower ATE than the baseline after Holm over the \
+         study, {higher} with a higher one, the rest not told apart.\n",
         read.len(),
         lower.len(),
-        higher.len()
     );
     let named: Vec<String> = lower
         .iter()
-        .map(|r| {
+        .map(|(r, _)| {
             format!(
                 "`{}` on {} {}",
                 r.config,
@@ -466,7 +494,7 @@ fn readings_findings(
         })
         .collect();
     Some(format!(
-        "{} comparisons: **{} lower ATE after Holm**{}, {} higher",
+        "{} comparisons: **{} lower ATE after Holm over the study**{}, {higher} higher",
         read.len(),
         lower.len(),
         if named.is_empty() {
@@ -474,7 +502,6 @@ fn readings_findings(
         } else {
             format!(" ({})", named.join("; "))
         },
-        higher.len()
     ))
 }
 
@@ -1054,6 +1081,7 @@ mod tests {
             diff_pct: Some((d, d - 3.0, d + 3.0)),
             test: "paired_t".into(),
             p_holm: Some(p_holm),
+            p: Some(p_holm / 2.0),
         }
     }
 
@@ -1077,8 +1105,9 @@ mod tests {
             md.contains("3 comparisons of readings: 1 with a lower ATE"),
             "{md}"
         );
+        assert!(md.contains("all 4 comparisons of the 1 folders"), "{md}");
         assert!(
-            glance.starts_with("3 comparisons: **1 lower ATE after Holm**"),
+            glance.starts_with("3 comparisons: **1 lower ATE after Holm over the study**"),
             "{glance}"
         );
         assert!(glance.ends_with(", 1 higher"), "{glance}");
@@ -1126,6 +1155,7 @@ mod tests {
             diff_pct: diff.map(|d| (d, d - 1.0, d + 1.0)),
             test: "paired_t".into(),
             p_holm: Some(1.0),
+            p: None,
         };
         let rows = vec![
             row("a", "orb", 0.0035, None),
@@ -1187,6 +1217,7 @@ mod tests {
             diff_pct: Some((diff, diff - 5.0, diff + 5.0)),
             test: "paired_t".into(),
             p_holm: Some(1.0),
+            p: None,
         };
         let rows = [
             row("gains", -4.0),

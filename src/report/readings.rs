@@ -193,6 +193,7 @@ mod tests {
             diff_pct: diff.map(|d| (d, d - 5.0, d + 5.0)),
             test: "paired_t".into(),
             p_holm,
+            p: p_holm,
         }
     }
 
