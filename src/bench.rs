@@ -426,10 +426,7 @@ fn run_config(base: &Config, label: &str, bench: BenchConfig, seed: u64) -> Conf
     let job = Job {
         sequence: label.to_string(),
         config: match bench.reading {
-            Some(r) => RunConfig::Reading {
-                kind: r.kind,
-                name: r.name(),
-            },
+            Some(r) => r.run_config(),
             None => RunConfig::Ours(bench.kind),
         },
         params: Params::default(),

@@ -145,6 +145,14 @@ impl ReadingColumn {
         v
     }
 
+    /// The sweep column this reading is.
+    pub fn run_config(&self) -> RunConfig {
+        RunConfig::Reading {
+            kind: self.kind,
+            name: self.name(),
+        }
+    }
+
     /// The readings as a table heading's suffix: `sightings all, verdict consensus`.
     pub fn label(&self) -> String {
         self.pairs()
@@ -194,10 +202,7 @@ pub fn of(config: &RunConfig) -> Option<ReadingColumn> {
 /// without; `None` when `s` names neither (an external system's name, or a mistake).
 pub fn parse_column(s: &str) -> Result<Option<RunConfig>> {
     if let Some(c) = ReadingColumn::parse(s)? {
-        return Ok(Some(RunConfig::Reading {
-            kind: c.kind,
-            name: c.name(),
-        }));
+        return Ok(Some(c.run_config()));
     }
     Ok(ConfigKind::parse(s).ok().map(RunConfig::Ours))
 }

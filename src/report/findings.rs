@@ -53,6 +53,29 @@ pub struct VersusRow {
 }
 
 impl VersusRow {
+    /// A row for the tests: ten runs of `config` on `sequence` in `folder`, unperturbed, mean
+    /// 0.1 m, no difference or p-value yet (set what a test needs with struct update).
+    #[cfg(test)]
+    pub fn example(folder: &str, sequence: &str, config: &str) -> VersusRow {
+        VersusRow {
+            folder: PathBuf::from(folder),
+            sequence: sequence.into(),
+            perturbation: "none".into(),
+            axis: None,
+            config: config.into(),
+            taus: None,
+            b: None,
+            runs: 10,
+            failed: 0,
+            mean: Some(0.1),
+            std: Some(0.01),
+            diff_pct: None,
+            test: "paired_t".into(),
+            p_holm: None,
+            p: None,
+        }
+    }
+
     /// Whether the difference survives Holm's correction.
     pub fn survives(&self) -> bool {
         self.p_holm.is_some_and(|p| p <= ALPHA)
@@ -1067,21 +1090,10 @@ mod tests {
 
     fn reading_row(seq: &str, config: &str, d: f64, p_holm: f64) -> VersusRow {
         VersusRow {
-            folder: PathBuf::from("results/readings/x"),
-            sequence: seq.into(),
-            perturbation: "none".into(),
-            axis: None,
-            config: config.into(),
-            taus: None,
-            b: None,
-            runs: 10,
-            failed: 0,
-            mean: Some(0.1),
-            std: Some(0.01),
             diff_pct: Some((d, d - 3.0, d + 3.0)),
-            test: "paired_t".into(),
             p_holm: Some(p_holm),
             p: Some(p_holm / 2.0),
+            ..VersusRow::example("results/readings/x", seq, config)
         }
     }
 
@@ -1141,21 +1153,11 @@ mod tests {
     #[test]
     fn the_same_runs_in_two_folders_count_once() {
         let row = |folder: &str, config: &str, mean: f64, diff: Option<f64>| VersusRow {
-            folder: folder.into(),
-            sequence: "twin_fr2_coke".into(),
-            perturbation: "none".into(),
-            axis: None,
-            config: config.into(),
-            taus: None,
-            b: None,
-            runs: 10,
-            failed: 0,
             mean: Some(mean),
             std: Some(0.0001),
             diff_pct: diff.map(|d| (d, d - 1.0, d + 1.0)),
-            test: "paired_t".into(),
             p_holm: Some(1.0),
-            p: None,
+            ..VersusRow::example(folder, "twin_fr2_coke", config)
         };
         let rows = vec![
             row("a", "orb", 0.0035, None),
@@ -1203,21 +1205,11 @@ mod tests {
     #[test]
     fn an_axis_table_without_a_gain_names_none() {
         let row = |folder: &str, diff: f64| VersusRow {
-            folder: folder.into(),
-            sequence: "twin_fr2_coke".into(),
             perturbation: "depth-axial:512".into(),
             axis: Some("depth-axial".into()),
-            config: "avc".into(),
-            taus: None,
-            b: None,
-            runs: 10,
-            failed: 0,
-            mean: Some(0.1),
-            std: Some(0.01),
             diff_pct: Some((diff, diff - 5.0, diff + 5.0)),
-            test: "paired_t".into(),
             p_holm: Some(1.0),
-            p: None,
+            ..VersusRow::example(folder, "twin_fr2_coke", "avc")
         };
         let rows = [
             row("gains", -4.0),

@@ -175,25 +175,13 @@ impl Tally {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::PathBuf;
 
     fn row(seq: &str, config: &str, diff: Option<f64>, p_holm: Option<f64>) -> VersusRow {
         VersusRow {
-            folder: PathBuf::from("f"),
-            sequence: seq.into(),
-            perturbation: "none".into(),
-            axis: None,
-            config: config.into(),
-            taus: None,
-            b: None,
-            runs: 10,
-            failed: 0,
-            mean: Some(0.1),
-            std: Some(0.01),
             diff_pct: diff.map(|d| (d, d - 5.0, d + 5.0)),
-            test: "paired_t".into(),
             p_holm,
             p: p_holm,
+            ..VersusRow::example("f", seq, config)
         }
     }
 

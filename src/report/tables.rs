@@ -709,6 +709,44 @@ fn external_notes(
     out.join(" ")
 }
 
+/// The baselines b that runs of the configurations `swept` ran at, ascending and distinct;
+/// `None` unless there are two (a Table I needs a sweep of b).
+fn swept_baselines(records: &[RunRecord], swept: impl Fn(&str) -> bool) -> Option<Vec<f64>> {
+    let mut baselines: Vec<f64> = records
+        .iter()
+        .filter(|r| swept(&r.config))
+        .filter_map(|r| r.baseline)
+        .collect();
+    baselines.sort_by(f64::total_cmp);
+    baselines.dedup();
+    (baselines.len() >= 2).then_some(baselines)
+}
+
+/// Table I's cell of `config` on `seq` at baseline `b` (`None` without runs), its runs added
+/// to the tidy CSV's `groups`.
+fn cell_at_b<'a>(
+    records: &'a [RunRecord],
+    seq: &str,
+    config: &str,
+    b: f64,
+    groups: &mut Vec<Group<'a>>,
+) -> Option<Cell> {
+    let runs: Vec<&RunRecord> = records
+        .iter()
+        .filter(|r| r.sequence == seq && r.config == config && r.baseline == Some(b))
+        .collect();
+    if runs.is_empty() {
+        return None;
+    }
+    let cell = Cell::of(&runs);
+    groups.push(Group {
+        sequence: seq.to_string(),
+        config: config.to_string(),
+        runs,
+    });
+    Some(cell)
+}
+
 /// The paper's Table I (fr3_walking_rpy, ATE in metres): the baselines b (m), then ORB-SLAM2's
 /// and AVC's ATE at each.
 pub const PAPER_TABLE1: [(f64, f64, f64); 7] = [
@@ -745,36 +783,16 @@ pub fn table1_camera(
     // The baseline's rows first, as in the paper's table.
     configs.sort_by_key(|c| (!c.starts_with("orb:"), c.to_string()));
     configs.dedup();
-    let mut baselines: Vec<f64> = records
-        .iter()
-        .filter(|r| configs.contains(&r.config.as_str()))
-        .filter_map(|r| r.baseline)
-        .collect();
-    baselines.sort_by(f64::total_cmp);
-    baselines.dedup();
-    if baselines.len() < 2 {
-        return None;
-    }
+    let baselines = swept_baselines(records, |c| configs.contains(&c))?;
     let mut header = vec!["sequence".to_string(), "system".to_string()];
     header.extend(baselines.iter().map(|b| format!("b={b}")));
     let (mut rows, mut groups) = (Vec::new(), Vec::new());
     for seq in sequence_order(records, catalog) {
         for config in &configs {
-            let mut cells = Vec::new();
-            for b in &baselines {
-                let runs: Vec<&RunRecord> = records
-                    .iter()
-                    .filter(|r| r.sequence == seq && r.config == *config && r.baseline == Some(*b))
-                    .collect();
-                cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
-                if !runs.is_empty() {
-                    groups.push(Group {
-                        sequence: seq.clone(),
-                        config: config.to_string(),
-                        runs,
-                    });
-                }
-            }
+            let cells: Vec<Option<Cell>> = baselines
+                .iter()
+                .map(|b| cell_at_b(records, &seq, config, *b, &mut groups))
+                .collect();
             if cells.iter().all(Option::is_none) {
                 continue;
             }
@@ -825,16 +843,7 @@ pub fn table1(
     catalog: &Catalog,
     labels: &BTreeMap<String, String>,
 ) -> Option<Rendered> {
-    let mut baselines: Vec<f64> = records
-        .iter()
-        .filter(|r| r.config == "avc")
-        .filter_map(|r| r.baseline)
-        .collect();
-    baselines.sort_by(f64::total_cmp);
-    baselines.dedup();
-    if baselines.len() < 2 {
-        return None;
-    }
+    let baselines = swept_baselines(records, |c| c == "avc")?;
     let avc = system_label("avc", labels);
     let mut header = vec!["sequence".to_string(), system_label("orb", labels)];
     header.extend(baselines.iter().map(|b| format!("{avc} b={b}")));
@@ -854,18 +863,7 @@ pub fn table1(
             });
         }
         for b in &baselines {
-            let runs: Vec<&RunRecord> = records
-                .iter()
-                .filter(|r| r.sequence == seq && r.config == "avc" && r.baseline == Some(*b))
-                .collect();
-            cells.push((!runs.is_empty()).then(|| Cell::of(&runs)));
-            if !runs.is_empty() {
-                groups.push(Group {
-                    sequence: seq.clone(),
-                    config: "avc".into(),
-                    runs,
-                });
-            }
+            cells.push(cell_at_b(records, &seq, "avc", *b, &mut groups));
         }
         let mut row = vec![seq.clone()];
         row.extend(cell_texts(&cells));

@@ -740,6 +740,26 @@ mod tests {
         (camera, map, p7, p10)
     }
 
+    /// Local mapping's context with MC-OR's `mcor` on, AVC off.
+    fn context<'a>(
+        camera: &'a Camera,
+        levels: &'a ScaleLevels,
+        params: &'a MappingParams,
+        ba: &'a BaConfig,
+        mcor: &'a McorParams,
+    ) -> MappingContext<'a> {
+        MappingContext {
+            camera,
+            levels,
+            params,
+            ba,
+            hooks: NoiseHooks {
+                mcor: Some(mcor),
+                ..NoiseHooks::default()
+            },
+        }
+    }
+
     #[test]
     fn under_the_mapping_scope_local_ba_receives_no_observation_mcor_rejected() {
         let (camera, map, p7, p10) = judged_map();
@@ -751,16 +771,7 @@ mod tests {
                 scope,
                 ..McorParams::default()
             };
-            let ctx = MappingContext {
-                camera: &camera,
-                levels: &levels,
-                params: &params,
-                ba: &ba,
-                hooks: NoiseHooks {
-                    mcor: Some(&mcor),
-                    ..NoiseHooks::default()
-                },
-            };
+            let ctx = context(&camera, &levels, &params, &ba, &mcor);
             let mut m = map.clone();
             let mut erasures = LocalBaErasures::default();
             let problem = local_ba_problem(kf2, &mut m, &ctx, &mut erasures).unwrap();
@@ -794,16 +805,7 @@ mod tests {
                 sightings,
                 ..McorParams::default()
             };
-            let ctx = MappingContext {
-                camera: &camera,
-                levels: &levels,
-                params: &params,
-                ba: &ba,
-                hooks: NoiseHooks {
-                    mcor: Some(&mcor),
-                    ..NoiseHooks::default()
-                },
-            };
+            let ctx = context(&camera, &levels, &params, &ba, &mcor);
             let mut m = map.clone();
             let erasures = local_ba(kf2, &mut m, &ctx);
             assert!(erasures.mcor_observations >= 1, "{erasures:?}");
