@@ -338,3 +338,62 @@ fn a_missing_file_is_named_once_with_its_reason() {
     assert!(err.contains("no/such/gt.txt"), "{err}");
     assert_eq!(err.matches("No such file").count(), 1, "{err}");
 }
+
+/// A camera (cam0) trajectory scored against EuRoC's body-frame ground truth is warned about,
+/// with the file that converts it and the ATE it would have; converted with `--body-from`, or
+/// a body-frame estimate, gets no warning.
+#[test]
+fn a_camera_frame_estimate_against_euroc_body_ground_truth_is_warned_about() {
+    let dir = std::env::temp_dir().join(format!("noisefree-eval-body-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let seq = dir.join("seq");
+    let out = noisefree(&[
+        "synth",
+        "--preset",
+        "stereo",
+        "--trajectory",
+        "rpy",
+        "--frames",
+        "40",
+        "--out",
+        seq.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let gt = seq.join("mav0/state_groundtruth_estimate0/data.csv");
+    let yaml = seq.join("mav0/cam0/sensor.yaml");
+    let body = ate_eval::io::read_trajectory(
+        &gt,
+        ate_eval::io::Format::Euroc,
+        None,
+        ate_eval::StampPolicy::Strict,
+    )
+    .unwrap()
+    .trajectory;
+    let t_bs = ate_eval::io::read_euroc_t_bs(&yaml).unwrap();
+    let camera = body.change_sensor_frame(&t_bs);
+    let (cam_file, body_file) = (dir.join("cam0.txt"), dir.join("body.txt"));
+    ate_eval::io::write_tum(&cam_file, &camera).unwrap();
+    ate_eval::io::write_tum(&body_file, &body).unwrap();
+    let eval = |est: &Path, extra: &[&str]| {
+        let mut args = vec!["eval", gt.to_str().unwrap(), est.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let o = noisefree(&args);
+        assert!(o.status.success(), "{o:?}");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let warned = eval(&cam_file, &[]);
+    assert!(
+        warned.contains("looks like a camera (cam0) trajectory")
+            && warned.contains(&format!("--body-from {}", yaml.display())),
+        "{warned}"
+    );
+    assert!(
+        !eval(&cam_file, &["--body-from", yaml.to_str().unwrap()]).contains("warning"),
+        "converted: nothing to say"
+    );
+    assert!(
+        !eval(&body_file, &[]).contains("warning"),
+        "a body trajectory"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -336,7 +336,9 @@ fn a_run_that_replaces_an_earlier_runs_files_says_so() {
 #[test]
 fn the_camera_of_a_folder_is_said_and_a_guess_is_a_warning_saying_how_to_give_it() {
     let root = tmpdir("camera-said");
-    let named = root.join("rgbd_dataset_freiburg1_mine");
+    // A twin of fr1 written under a name that says no camera carries its camera file, and
+    // `run --path` reads the folder with it: as with --camera, bit for bit.
+    let own = root.join("mine");
     noisefree_ok(&[
         "synth",
         "--preset",
@@ -344,26 +346,43 @@ fn the_camera_of_a_folder_is_said_and_a_guess_is_a_warning_saying_how_to_give_it
         "--frames",
         "12",
         "--out",
-        named.to_str().unwrap(),
+        own.to_str().unwrap(),
     ]);
-    let run = |dir: &std::path::Path| {
-        noisefree_ok(&[
-            "run",
-            "--path",
-            dir.to_str().unwrap(),
-            "--quiet",
-            "--out",
-            root.join("out").to_str().unwrap(),
-        ])
+    let run = |dir: &std::path::Path, out: &str, extra: &[&str]| {
+        let mut args = vec!["run", "--path", dir.to_str().unwrap(), "--quiet", "--out"];
+        let out = root.join(out);
+        let out = out.to_str().unwrap().to_string();
+        args.push(&out);
+        args.extend_from_slice(extra);
+        let o = noisefree_ok(&args);
+        let traj = std::fs::read_to_string(root.join(&out).join("trajectory.txt")).unwrap();
+        (String::from_utf8_lossy(&o.stderr).into_owned(), traj)
     };
-    let said = String::from_utf8_lossy(&run(&named).stderr).into_owned();
+    let (said, by_itself) = run(&own, "own", &[]);
+    assert!(
+        said.contains("from its own camera-orbslam2.yaml") && !said.contains("warning"),
+        "{said}"
+    );
+    let settings = own.join("camera-orbslam2.yaml");
+    let (_, given) = run(&own, "given", &["--camera", settings.to_str().unwrap()]);
+    assert_eq!(
+        by_itself, given,
+        "the folder's camera file is the camera it runs with"
+    );
+    // Without the file, the name decides, and a name that says nothing is a warned guess.
+    for f in ["camera-orbslam2.yaml", "camera-orbslam3.yaml"] {
+        std::fs::remove_file(own.join(f)).unwrap();
+    }
+    let named = root.join("rgbd_dataset_freiburg1_mine");
+    std::fs::rename(&own, &named).unwrap();
+    let (said, _) = run(&named, "named", &[]);
     assert!(
         said.contains("TUM Fr1's") && said.contains("from the folder's name"),
         "{said}"
     );
-    let bare = root.join("mine");
+    let bare = root.join("bare");
     std::fs::rename(&named, &bare).unwrap();
-    let warned = String::from_utf8_lossy(&run(&bare).stderr).into_owned();
+    let (warned, _) = run(&bare, "bare", &[]);
     assert!(
         warned.contains("warning:") && warned.contains("assuming freiburg3's"),
         "{warned}"

@@ -94,8 +94,8 @@ pub fn run(args: ReportArgs) -> Result<()> {
             let out = splice(&text, &md).with_context(|| file.display().to_string())?;
             write_atomic(file, out.as_bytes())?;
             eprintln!(
-                "wrote the findings of {} folders into {}",
-                dirs.len(),
+                "wrote the findings of {} into {}",
+                crate::report::markdown::counted(dirs.len(), "folder", "folders"),
                 file.display()
             );
         }
@@ -111,9 +111,9 @@ pub fn run(args: ReportArgs) -> Result<()> {
                 );
             }
             eprintln!(
-                "{}: findings agree with the tables of {} folders",
+                "{}: findings agree with the tables of {}",
                 file.display(),
-                dirs.len()
+                crate::report::markdown::counted(dirs.len(), "folder", "folders")
             );
         }
         (None, None) => print!("{}", md.full),

@@ -28,8 +28,9 @@ pub struct SynthArgs {
     /// (1650 for loop: its circuit plus 15 s of revisit).
     #[arg(long)]
     pub frames: Option<usize>,
-    /// Seed of the scene textures and of every noise draw.
-    #[arg(long, default_value_t = 1)]
+    /// Seed of the scene textures and of every noise draw: the sequence that `run --seq P
+    /// --synth-seed S` runs on (both default to 0, so `synth` and `run` give the same sequence).
+    #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Output folder; must not exist or be empty (see --force). RGB-D presets write the TUM
     /// RGB-D layout (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, associations.txt);
@@ -76,50 +77,6 @@ fn parse_occlusion(s: &str) -> anyhow::Result<(usize, usize)> {
             .parse()
             .with_context(|| format!("--occlusion length '{b}'"))?,
     ))
-}
-
-/// A note when the TUM reader would read the written RGB-D folder with another camera than the
-/// one it was rendered with: the reader takes the camera from the folder's name (freiburg1 /
-/// fr1..., freiburg2, else fr3's), so a twin of fr1 or fr2 must be written under such a name for
-/// `run --path` to undistort and scale it right.
-fn camera_note(gen: &synth::Generator, out: &std::path::Path) -> Option<String> {
-    if !gen.config().is_rgbd() {
-        return None;
-    }
-    let name = out
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let read_as = datasets::CameraId::detect_tum(&name).unwrap_or(datasets::CameraId::Fr3);
-    let camera = gen.camera();
-    if read_as.tum_camera().as_ref() == Some(&camera) {
-        return None;
-    }
-    let id = [
-        datasets::CameraId::Fr1,
-        datasets::CameraId::Fr2,
-        datasets::CameraId::Fr3,
-    ]
-    .into_iter()
-    .find(|id| id.tum_camera().as_ref() == Some(&camera));
-    Some(match id {
-        Some(id) => {
-            let key = match id {
-                datasets::CameraId::Fr1 => "freiburg1",
-                datasets::CameraId::Fr2 => "freiburg2",
-                _ => "freiburg3",
-            };
-            format!(
-                "`run --path` takes a TUM folder's camera from its name and would read '{name}' \
-                 with {read_as:?}'s camera; this sequence has {id:?}'s: name the folder with \
-                 '{key}' in it (e.g. rgbd_dataset_{key}_{name})"
-            )
-        }
-        None => format!(
-            "this sequence's camera is none of TUM's, and `run --path` reads '{name}' with \
-             {read_as:?}'s camera"
-        ),
-    })
 }
 
 /// Runs `noisefree synth`.
@@ -172,38 +129,15 @@ pub fn run(args: SynthArgs) -> anyhow::Result<()> {
         secs,
         frames as f64 / secs.max(1e-9)
     );
-    if let Some(note) = camera_note(&gen, &args.out) {
-        eprintln!("note: {note}");
+    if gen.config().is_rgbd() {
+        println!(
+            "camera: {} (`run --path` reads it; give it to another SLAM system)",
+            args.out.join(datasets::FOLDER_SETTINGS).display()
+        );
     }
     if let Some(sheet) = &args.contact_sheet {
         synth::write_contact_sheet(&gen, frames, 4, sheet)?;
         println!("wrote contact sheet {}", sheet.display());
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::camera_note;
-    use std::path::Path;
-
-    /// A twin of fr1 written under a name the reader would take for fr3 gets a note naming the
-    /// fix; under an fr1 name, or a preset with fr3's camera anywhere, none.
-    #[test]
-    fn camera_note_when_the_folder_name_would_mislead_the_reader() {
-        let twin = synth::Generator::new(synth::SynthConfig::preset("twin_fr1_desk").unwrap(), 0);
-        let note = camera_note(&twin, Path::new("/tmp/out")).unwrap();
-        assert!(
-            note.contains("Fr3") && note.contains("rgbd_dataset_freiburg1_out"),
-            "{note}"
-        );
-        assert_eq!(
-            camera_note(&twin, Path::new("/tmp/rgbd_dataset_freiburg1_t")),
-            None
-        );
-        let kinect = synth::Generator::new(synth::SynthConfig::preset("kinect").unwrap(), 0);
-        assert_eq!(camera_note(&kinect, Path::new("/tmp/out")), None);
-        let stereo = synth::Generator::new(synth::SynthConfig::preset("stereo").unwrap(), 0);
-        assert_eq!(camera_note(&stereo, Path::new("/tmp/out")), None);
-    }
 }

@@ -8,6 +8,7 @@
 //! it when it is positive and survives; otherwise **no difference detected**, with the interval
 //! that says how large a difference the data leave room for.
 
+use crate::report::markdown::counted;
 use crate::report::stats::holm;
 use crate::report::versus::{relative_text, ALPHA};
 use anyhow::{Context, Result};
@@ -458,11 +459,14 @@ fn readings_findings(
         "### The readings of what the paper leaves unsaid\n\nThe paper's techniques under \
          each reading of a choice it does not make (which sightings form a cluster, who decides, \
          where MC-OR acts, AVC's gate and what b is; docs/readings.md), against the baseline on \
-         the same runs. Holm's correction here runs over the whole study: all {} comparisons of \
-         the {} folders that tried a reading, so trying many readings, and confirming one on \
-         fresh draws, are counted.\n\n",
-        study.len(),
-        folders.len()
+         the same runs. Holm's correction here runs over the whole study: all {} of {} that tried \
+         a reading, so trying many readings, and confirming one on fresh draws, are counted.\n\n",
+        counted(study.len(), "comparison", "comparisons"),
+        if folders.len() == 1 {
+            "the folder".to_string()
+        } else {
+            format!("the {} folders", folders.len())
+        },
     );
     let survivors: Vec<(&VersusRow, f64)> =
         read.iter().copied().filter(|(_, p)| *p <= ALPHA).collect();
@@ -489,36 +493,44 @@ fn readings_findings(
                 .map_or("-".to_string(), |(row, g)| format!("{g:+.0} % ({row})"));
             let _ = writeln!(
                 md,
-                "| {} | {} | `{}` | {} | {p:.3} | {paper} |",
+                "| {} | {} | `{}` | {} | {} | {paper} |",
                 link(base, &r.folder, "readings.md"),
                 r.sequence,
                 r.config,
                 diff_text(r.diff_pct.expect("filtered")),
+                if *p < 0.001 {
+                    "< 0.001".to_string()
+                } else {
+                    format!("{p:.3}")
+                },
             );
         }
         md.push('\n');
     }
     let _ = writeln!(
         md,
-        "{} comparisons of readings: {} with a lower ATE than the baseline after Holm over the \
-         study, {higher} with a higher one, the rest not told apart.\n",
-        read.len(),
+        "{} of readings: {} with a lower ATE than the baseline after Holm over the study, \
+         {higher} with a higher one, the rest not told apart.\n",
+        counted(read.len(), "comparison", "comparisons"),
         lower.len(),
     );
     let named: Vec<String> = lower
         .iter()
         .map(|(r, _)| {
             format!(
-                "`{}` on {} {}",
+                "`{}` on {} {} ({})",
                 r.config,
                 r.sequence,
-                diff_text(r.diff_pct.expect("filtered"))
+                diff_text(r.diff_pct.expect("filtered")),
+                r.folder
+                    .file_name()
+                    .map_or(String::new(), |f| f.to_string_lossy().into_owned()),
             )
         })
         .collect();
     Some(format!(
-        "{} comparisons: **{} lower ATE after Holm over the study**{}, {higher} higher",
-        read.len(),
+        "{}: **{} lower ATE after Holm over the study**{}, {higher} higher",
+        counted(read.len(), "comparison", "comparisons"),
         lower.len(),
         if named.is_empty() {
             String::new()
@@ -923,12 +935,13 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
         .count();
     let comparisons = rows.iter().filter(|r| r.diff_pct.is_some()).count();
     let mut md = format!(
-        "## Findings\n\nFrom {comparisons} comparisons with our ORB-SLAM2 baseline in {folders} \
-         committed tables (each table's p-values Holm-corrected together at {ALPHA}; a \
+        "## Findings\n\nFrom {} with our ORB-SLAM2 baseline in {} (each table's p-values Holm-corrected together at {ALPHA}; a \
          difference's 95 % interval is Fieller's, of the ratio of the means; paired where runs \
          share seed and perturbation draw). Runs that two tables share count once, under the \
          stricter of their corrections, so a table's count here can be below its own. Every \
-         number below is read from the table it links.\n\n"
+         number below is read from the table it links.\n\n",
+        counted(comparisons, "comparison", "comparisons"),
+        counted(folders, "table", "tables"),
     );
     if !left_out.is_empty() {
         let named: Vec<String> = left_out
@@ -967,13 +980,15 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
     table4_findings(&mut md, dirs, base)?;
     variance_findings(&mut md, &rows, base);
     let glance = format!(
-        "**Results at a glance** (from {comparisons} comparisons with our baseline in {folders} \
-         committed tables, Holm-corrected at {ALPHA}; intervals, verdicts and links in \
+        "**Results at a glance** (from {} with our baseline in {}, Holm-corrected at {ALPHA}; \
+         intervals, verdicts and links in \
          [results/README.md]({}#findings)):\n\n\
          - Table III on the twins, MC-OR, AVC and both against ORB-SLAM2, unperturbed: {}.\n\
          - The same under a real camera's systematic errors: {}.\n\
          - Under depth noise: MC-OR against lateral noise, {} of {} comparisons gain; AVC \
          against axial noise, {} of {} comparisons gain.\n{}",
+        counted(comparisons, "comparison", "comparisons"),
+        counted(folders, "table", "tables"),
         results_readme(base),
         plain.sentence(),
         chained.sentence(),
@@ -1117,7 +1132,10 @@ mod tests {
             md.contains("3 comparisons of readings: 1 with a lower ATE"),
             "{md}"
         );
-        assert!(md.contains("all 4 comparisons of the 1 folders"), "{md}");
+        assert!(
+            md.contains("all 4 comparisons of the folder that tried"),
+            "{md}"
+        );
         assert!(
             glance.starts_with("3 comparisons: **1 lower ATE after Holm over the study**"),
             "{glance}"

@@ -6,7 +6,7 @@
 //! the techniques, so it gets the intervals the accuracy tables have.
 
 use crate::columns::ConfigKind;
-use crate::report::markdown::{render, system_label, Rendered};
+use crate::report::markdown::{counted, render, system_label, Rendered};
 use crate::report::stats::{summarize, Comparison, Summary};
 use crate::report::tables::{fps_cell, our_runs, sequence_order};
 use crate::report::versus::{
@@ -149,10 +149,10 @@ pub fn fps_versus(
          interval of the mean (Student's t) and the median; each technique against our ORB-SLAM2 \
          baseline on the same sequence: the difference of mean frames per second in % of the \
          baseline's (positive: faster), its 95 % interval and two-sided p, by the paired t-test \
-         where both ran the same seeds and draws, Welch's otherwise. {} comparisons in this \
-         table, Holm-corrected together; **bold** survives at 0.05. Runs of a sweep share the \
+         where both ran the same seeds and draws, Welch's otherwise. {} in this table, \
+         Holm-corrected together; **bold** survives at 0.05. Runs of a sweep share the \
          machine's cores, so these compare columns of one sweep, not machines.",
-        tested
+        counted(tested, "comparison", "comparisons")
     );
     let mut t = render(
         "Table IV: each system's frames per second against the baseline",

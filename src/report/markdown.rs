@@ -68,3 +68,19 @@ pub fn system_label(config: &str, labels: &BTreeMap<String, String>) -> String {
         },
     }
 }
+
+/// `n` with its noun in the number it takes ("1 table", "3 tables"): a report read on a
+/// user's one-folder sweep must not say "1 tables".
+pub fn counted(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
+#[cfg(test)]
+mod counted_tests {
+    #[test]
+    fn one_takes_the_singular_and_every_other_count_the_plural() {
+        assert_eq!(super::counted(1, "table", "tables"), "1 table");
+        assert_eq!(super::counted(0, "table", "tables"), "0 tables");
+        assert_eq!(super::counted(28, "table", "tables"), "28 tables");
+    }
+}

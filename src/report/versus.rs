@@ -7,7 +7,7 @@
 //! row carries the paper's ORB-SLAM2 figure and the paper's relative difference for the same
 //! technique on the sequence the twin imitates, beside ours.
 
-use crate::report::markdown::{render, system_label, Rendered};
+use crate::report::markdown::{counted, render, system_label, Rendered};
 use crate::report::stats::{holm, paired, summarize, welch, Comparison, Summary};
 use crate::report::tables::{are_default_params, mm_decimals, num, sequence_order};
 use crate::sweep::plan::ConfigKind;
@@ -415,9 +415,10 @@ fn render_rows(
          baseline mean's own uncertainty counts; `[unbounded]` where the baseline's mean is not \
          told from zero) and the two-sided p-value, by the paired t-test where both systems ran \
          on the same seeds and perturbation draws (every run with its partner), Welch's t-test \
-         otherwise. {comparisons} comparisons in this table, Holm-corrected together; a \
+         otherwise. {} in this table, Holm-corrected together; a \
          difference in **bold** survives the correction at {ALPHA}. Where both systems' runs \
          are each all identical (one result each), nothing is tested.{}",
+        counted(comparisons, "comparison", "comparisons"),
         if paper {
             " `paper`: the paper's figure for the system's column on the sequence a twin \
              imitates, and its difference from the paper's ORB-SLAM2 figure in %."
@@ -656,6 +657,10 @@ pub(crate) mod tests {
         // One varying run makes it a comparison again.
         recs[5].ate_rmse = Some(0.0051);
         let t = versus_baseline(&recs, &Catalog::embedded(), false, &BTreeMap::new()).unwrap();
-        assert!(t.markdown.contains("1 comparisons"), "{}", t.markdown);
+        assert!(
+            t.markdown.contains("1 comparison in this table"),
+            "{}",
+            t.markdown
+        );
     }
 }

@@ -51,6 +51,17 @@ pub fn detect_format(dir: &Path) -> Option<Format> {
     }
 }
 
+/// The name of the camera file a folder noisefree writes carries with it (ORB-SLAM2's settings
+/// layout): `synth` and `perturb` write it, and opening the folder reads it.
+pub const FOLDER_SETTINGS: &str = "camera-orbslam2.yaml";
+
+/// The camera file folder `dir` carries itself ([`FOLDER_SETTINGS`]), if it has one: a folder
+/// that says its own camera is read with it, before any guess from its name or `sensor.yaml`.
+pub fn folder_settings(dir: &Path) -> Option<std::path::PathBuf> {
+    let p = dir.join(FOLDER_SETTINGS);
+    p.is_file().then_some(p)
+}
+
 /// Opens any TUM RGB-D or EuRoC folder with the camera of an ORB-SLAM2 / ORB-SLAM3 settings
 /// file (`noisefree run --camera`) instead of the one its name or `sensor.yaml` files imply:
 /// intrinsics, distortion, `bf`, `ThDepth`, the depth factor (TUM) and the rectification
@@ -98,6 +109,8 @@ pub fn open_path_with_settings(
 pub enum CameraOrigin {
     /// An ORB-SLAM2 / ORB-SLAM3 settings file given with the folder (`--camera`).
     Settings(std::path::PathBuf),
+    /// The folder's own camera file ([`FOLDER_SETTINGS`]), written with it.
+    FolderSettings(std::path::PathBuf),
     /// A TUM folder whose name says its freiburg camera.
     TumName(CameraId),
     /// A TUM folder whose name says no freiburg camera: freiburg3's is assumed.
@@ -111,6 +124,9 @@ impl CameraOrigin {
     pub fn of(dir: &Path, settings: Option<&Path>) -> CameraOrigin {
         if let Some(s) = settings {
             return CameraOrigin::Settings(s.to_path_buf());
+        }
+        if let (Some(_), Some(s)) = (detect_format(dir), folder_settings(dir)) {
+            return CameraOrigin::FolderSettings(s);
         }
         match detect_format(dir) {
             Some(Format::EurocStereo) => CameraOrigin::EurocSensorFiles,
@@ -132,6 +148,12 @@ impl CameraOrigin {
             CameraOrigin::Settings(s) => {
                 format!("camera of {}: from {}", dir.display(), s.display())
             }
+            CameraOrigin::FolderSettings(s) => format!(
+                "camera of {}: from its own {} (written with the folder)",
+                dir.display(),
+                s.file_name()
+                    .map_or(String::new(), |f| f.to_string_lossy().into_owned())
+            ),
             CameraOrigin::TumName(id) => format!(
                 "camera of {}: TUM {id:?}'s (ORB-SLAM2's TUM settings and depth factor), from the \
                  folder's name",
@@ -160,7 +182,8 @@ impl CameraOrigin {
     }
 }
 
-/// Loads any TUM RGB-D or EuRoC folder with default options, detecting its layout.
+/// Loads any TUM RGB-D or EuRoC folder with default options, detecting its layout; a folder
+/// with its own camera file ([`folder_settings`]) is read with that camera.
 pub fn load_path(dir: &Path) -> Result<Sequence, DatasetError> {
     let (mut seq, frames) = open_path(dir)?;
     seq.frames = frames.without_colour().read_all()?;
@@ -175,6 +198,9 @@ pub fn open_path(dir: &Path) -> Result<(Sequence, FrameReader), DatasetError> {
             path: dir.to_path_buf(),
             what: "a TUM RGB-D or EuRoC sequence folder".into(),
         });
+    }
+    if let (Some(_), Some(settings)) = (detect_format(dir), folder_settings(dir)) {
+        return open_path_with_settings(dir, &settings);
     }
     match detect_format(dir) {
         Some(Format::EurocStereo) => open_euroc_with(dir, &EurocOptions::default()),

@@ -116,6 +116,19 @@ impl Config {
         };
         let o = &self.orb;
         c.count("n_features", o.n_features as u64, 1, MAX_FEATURES);
+        if o.n_features <= self.init_min_keypoints {
+            // An unreachable threshold otherwise fails quietly; this one fails every frame.
+            c.fail(
+                "n_features",
+                o.n_features,
+                format!(
+                    "must be above init_min_keypoints = {}: the map starts on a frame with more \
+                     keypoints than that (ORB-SLAM2's initialisation), so no frame could start \
+                     it; set init_min_keypoints below n_features with it",
+                    self.init_min_keypoints
+                ),
+            );
+        }
         c.above("scale_factor", o.scale_factor, 1.0);
         c.above_to("scale_factor", o.scale_factor, 1.0, MAX_SCALE_FACTOR);
         c.count("n_levels", o.n_levels as u64, 1, MAX_LEVELS);
@@ -285,6 +298,20 @@ mod tests {
         for c in [Config::default(), Config::stereo(), all] {
             assert_eq!(c.check(), Ok(()));
         }
+    }
+
+    #[test]
+    fn features_too_few_to_initialise_are_refused_naming_the_threshold() {
+        let mut cfg = Config::default();
+        cfg.orb.n_features = 500;
+        let e = cfg.check().unwrap_err();
+        assert_eq!(
+            (e.key.as_str(), e.value.as_str()),
+            ("orb.n_features", "500")
+        );
+        assert!(e.rule.contains("init_min_keypoints = 500"), "{e}");
+        cfg.init_min_keypoints = 400;
+        assert_eq!(cfg.check(), Ok(()), "a lower start threshold makes it run");
     }
 
     #[test]

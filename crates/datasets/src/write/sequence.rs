@@ -44,19 +44,31 @@ pub fn write_sequence(
             Format::EurocStereo => write_euroc(seq, frames, root, &progress)?,
         }
         copy_groundtruth(seq.format, source, root)?;
-        for format in [SettingsFormat::Orbslam2, SettingsFormat::Orbslam3] {
-            let s = write_settings(
-                &CameraSettings::of_camera(&seq.camera, seq.depth_factor, None),
-                format,
-                &seq.name,
-            );
-            text(&root.join(format!("camera-{}.yaml", format.name())), &s)?;
-        }
+        camera_files(
+            root,
+            &CameraSettings::of_camera(&seq.camera, seq.depth_factor, None),
+            &seq.name,
+        )?;
         for (name, content) in extra {
             text(&root.join(name), content)?;
         }
         Ok(())
     })
+}
+
+/// The folder's camera as `camera-orbslam2.yaml` and `camera-orbslam3.yaml` at its top: the
+/// camera `noisefree run --path` reads the folder with ([`crate::folder_settings`]) and the one
+/// another SLAM system is given, so nobody guesses it from the folder's name.
+pub(super) fn camera_files(
+    root: &Path,
+    settings: &CameraSettings,
+    title: &str,
+) -> Result<(), DatasetError> {
+    for format in [SettingsFormat::Orbslam2, SettingsFormat::Orbslam3] {
+        let s = write_settings(settings, format, title);
+        text(&root.join(format!("camera-{}.yaml", format.name())), &s)?;
+    }
+    Ok(())
 }
 
 /// The ground-truth file of a source folder, where it has one, copied over the one written from

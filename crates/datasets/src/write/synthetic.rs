@@ -7,6 +7,10 @@
 //! distorted images with each camera's intrinsics, distortion and T_BS, so a reader rectifies
 //! them as it does real EuRoC data).
 //!
+//! An RGB-D folder carries its camera as `camera-orbslam2.yaml` and `camera-orbslam3.yaml`, which
+//! `run --path` reads before any guess from the folder's name (a twin of fr1 under any name is
+//! read with fr1's camera).
+//!
 //! The camera is not at the body origin (see [`synth::output::body`]), so readers that forget
 //! the body-to-camera conversion get a visibly wrong trajectory.
 
@@ -23,6 +27,7 @@ use super::euroc::{self, EurocLists, EurocSensor};
 use super::files::{depth_png, mkdir, png, write_atomically};
 use super::tum::{self, TumEntry, TumLists};
 use super::Digits;
+use crate::settings::CameraSettings;
 use crate::DatasetError;
 
 /// Writes frames `0..n` of `gen` into `dir`: TUM RGB-D for an RGB-D configuration, EuRoC ASL
@@ -38,7 +43,16 @@ pub fn write_synthetic(
     gen.check_frames(n)?;
     write_atomically(dir, |root| {
         if gen.config().is_rgbd() {
-            write_tum(gen, n, root, &progress)
+            write_tum(gen, n, root, &progress)?;
+            super::sequence::camera_files(
+                root,
+                &CameraSettings::of_camera(
+                    &gen.camera(),
+                    Some(gen.config().depth_units_per_metre),
+                    None,
+                ),
+                &title(gen),
+            )
         } else {
             write_euroc(gen, n, root, &progress)
         }
