@@ -1,9 +1,11 @@
 # noisefree — common tasks. `make help` lists them.
-.PHONY: help run test bench lint layers fmt results golden vocabulary fuzz
+.PHONY: help run test test-rerun view bench lint layers fmt results golden vocabulary fuzz
 
 help:
 	@echo "make run    - run the SLAM system on the embedded synthetic default (release build)"
 	@echo "make test   - the whole test suite (the README's test command)"
+	@echo "make view   - a release binary with the Rerun recording (run --rerun FILE.rrd, view) and the viewer's venv"
+	@echo "make test-rerun - the recording's tests, read back with Rerun's own decoder (rerun-sdk in target/rerun-venv)"
 	@echo "make bench  - criterion benchmarks of every crate (release)"
 	@echo "make lint   - cargo fmt --check + clippy -D warnings"
 	@echo "make layers - import graphs of src/ and every crate: no circle; synth and ate-eval keep their layers"
@@ -19,6 +21,24 @@ run:
 
 test:
 	cargo test --workspace
+
+# The Rerun recording sits behind the `rerun` cargo feature (about nine minutes more of a cold
+# build on two cores). The viewer and the decoder the tests read recordings back with come from
+# PyPI, at the crate's version: `rerun FILE.rrd` opens a recording.
+RERUN_VENV := target/rerun-venv
+RERUN_SDK := rerun-sdk==0.36.3
+
+$(RERUN_VENV)/bin/python:
+	python3 -m venv $(RERUN_VENV)
+	$(RERUN_VENV)/bin/pip install --quiet $(RERUN_SDK)
+
+view: $(RERUN_VENV)/bin/python
+	cargo build --release --features rerun
+	@echo "record: ./target/release/noisefree run --seq walking --mcor --rerun walking.rrd"
+	@echo "open:   $(RERUN_VENV)/bin/rerun walking.rrd"
+
+test-rerun: $(RERUN_VENV)/bin/python
+	NOISEFREE_RERUN_PYTHON=$(CURDIR)/$(RERUN_VENV)/bin/python cargo test --features rerun --test rerun_cli
 
 bench:
 	cargo bench --workspace

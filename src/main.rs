@@ -17,6 +17,7 @@ mod file_name;
 #[cfg(test)]
 mod fuzz_cli;
 mod readings;
+mod recording;
 mod regress;
 mod report;
 mod runner;
@@ -78,6 +79,8 @@ enum Command {
     /// The level of a camera chain at which the baseline's median ATE on a sequence equals a
     /// target (the paper's figure), by bisection.
     Match(commands::match_level::MatchArgs),
+    /// Trajectory files aligned to the ground truth as one Rerun recording (`rerun FILE.rrd`).
+    View(commands::view::ViewArgs),
     /// Vocabularies of ORB words for place recognition: train, convert (ORBvoc.txt <-> binary), info.
     Vocab(commands::vocab::VocabArgs),
 }
@@ -102,6 +105,7 @@ fn main() -> ExitCode {
         Command::Settings(a) => commands::settings::run(a),
         Command::Config(a) => commands::config::run(a),
         Command::Match(a) => commands::match_level::run(a),
+        Command::View(a) => commands::view::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

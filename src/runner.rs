@@ -10,8 +10,9 @@ use slam_core::data::Features;
 use slam_core::feature::{OrbConfig, OrbExtractor};
 use slam_core::frame::extract_features;
 use slam_core::module::loop_closing::LoopEvent;
+use slam_core::module::pose_estimation::{tap_pose_optimizations, PoseOptRecord};
 use slam_core::place::Vocabulary;
-use slam_core::system::{Config, FrameStats, System};
+use slam_core::system::{Config, FrameStats, System, TrackResult};
 use slam_core::{Camera, FrameInput};
 use std::sync::Arc;
 use std::time::Instant;
@@ -363,7 +364,7 @@ pub fn run_sequence(
     vocabulary: Option<&Arc<Vocabulary>>,
     on_frame: impl FnMut(usize),
 ) -> RunOutcome {
-    run(seq, None, config, vocabulary, on_frame)
+    run(seq, None, config, vocabulary, on_frame, None)
 }
 
 /// As [`run_sequence`], tracking features extracted beforehand (`seq.frames` may then be empty:
@@ -382,7 +383,44 @@ pub fn run_extracted(
         extracted.orb, config.orb,
         "features extracted with other ORB settings than the run's"
     );
-    run(seq, Some(extracted), config, vocabulary, on_frame)
+    run(seq, Some(extracted), config, vocabulary, on_frame, None)
+}
+
+/// What an observer of a run ([`run_observed`]) sees after each frame: the system as the frame
+/// left it, what tracking returned, and every pose optimization the frame made (the last one of
+/// a tracked frame is its final pose's, with each match's fate).
+#[cfg_attr(not(feature = "rerun"), allow(dead_code))]
+pub struct Observation<'a> {
+    /// Frame index in the sequence.
+    pub index: usize,
+    /// The system after the frame.
+    pub system: &'a System,
+    /// What tracking returned for it.
+    pub result: &'a TrackResult,
+    /// The frame's pose optimizations, in call order.
+    pub optimizations: &'a [PoseOptRecord],
+}
+
+/// As [`run_sequence`] (or [`run_extracted`] with `extracted`), calling `observe` after every
+/// frame with what the frame did (a recording of the run, `run --rerun`). Observing reads only:
+/// the trajectory is the unobserved run's, bit for bit.
+#[cfg_attr(not(feature = "rerun"), allow(dead_code))]
+pub fn run_observed(
+    seq: &Sequence,
+    extracted: Option<&ExtractedSequence>,
+    config: &Config,
+    vocabulary: Option<&Arc<Vocabulary>>,
+    on_frame: impl FnMut(usize),
+    mut observe: impl FnMut(&Observation<'_>),
+) -> RunOutcome {
+    run(
+        seq,
+        extracted,
+        config,
+        vocabulary,
+        on_frame,
+        Some(&mut observe),
+    )
 }
 
 fn run(
@@ -391,6 +429,7 @@ fn run(
     config: &Config,
     vocabulary: Option<&Arc<Vocabulary>>,
     mut on_frame: impl FnMut(usize),
+    mut observe: Option<&mut dyn FnMut(&Observation<'_>)>,
 ) -> RunOutcome {
     let (start, cpu_start) = (Instant::now(), thread_cpu_s());
     let mut system = match vocabulary {
@@ -400,11 +439,24 @@ fn run(
     let frames = extracted.map_or(seq.frames.len(), |e| e.frames.len());
     let mut stats = Vec::with_capacity(frames);
     for i in 0..frames {
-        let r = match extracted {
+        let track = |system: &mut System| match extracted {
             None => system.track(&seq.frames[i]),
             Some(e) => {
                 let f = &e.frames[i];
                 system.track_features(f.timestamp, f.features.clone(), f.extraction_ms)
+            }
+        };
+        let r = match observe.as_mut() {
+            None => track(&mut system),
+            Some(observe) => {
+                let (r, optimizations) = tap_pose_optimizations(|| track(&mut system));
+                observe(&Observation {
+                    index: i,
+                    system: &system,
+                    result: &r,
+                    optimizations: &optimizations,
+                });
+                r
             }
         };
         stats.push(r.stats);

@@ -92,6 +92,10 @@ pub struct Loaded {
     pub seq: Sequence,
     /// The frames still to read, when several runs share their features.
     pub reader: Option<FrameReader>,
+    /// Every frame's images as read (colour included, perturbed where the run is): what a
+    /// recording of the run shows (`run --rerun`).
+    #[cfg_attr(not(feature = "rerun"), allow(dead_code))]
+    pub images: FrameReader,
 }
 
 impl Loaded {
@@ -126,6 +130,7 @@ pub fn load(
             perturb_seed
         );
     }
+    let images = frames.clone();
     let reader = if several {
         Some(frames)
     } else {
@@ -135,7 +140,12 @@ pub fn load(
             .with_context(|| format!("loading {label}"))?;
         None
     };
-    Ok(Loaded { label, seq, reader })
+    Ok(Loaded {
+        label,
+        seq,
+        reader,
+        images,
+    })
 }
 
 /// The system run: the sensor's defaults, overlaid by the `--config` file, with the switches
@@ -158,7 +168,8 @@ pub fn system_config(
 
 /// Runs `seeds` (one thread each, `jobs` at once) on `loaded` under `config`, a progress bar
 /// per run (and one for the features, extracted once when several runs share them), hidden
-/// when `quiet`.
+/// when `quiet`. With `rerun`, the first seed's run is recorded into that file
+/// ([`crate::recording`]); its trajectory is the same.
 pub fn run_seeds(
     loaded: &Loaded,
     config: &Config,
@@ -166,6 +177,7 @@ pub fn run_seeds(
     seeds: &[u64],
     jobs: Option<usize>,
     quiet: bool,
+    rerun: Option<&Path>,
 ) -> Result<Vec<(u64, RunOutcome)>> {
     let (seq, n_frames) = (&loaded.seq, loaded.frames());
     let multi = MultiProgress::with_draw_target(if quiet {
@@ -198,25 +210,63 @@ pub fn run_seeds(
         }
         None => None,
     };
-    Ok(pool.install(|| {
+    pool.install(|| {
         seeds
             .par_iter()
-            .map(|&seed| {
+            .enumerate()
+            .map(|(k, &seed)| {
                 let bar = multi.add(ProgressBar::new(n_frames as u64));
                 bar.set_style(style.clone());
                 bar.set_prefix(format!("seed {seed}"));
                 let mut cfg = config.clone();
                 cfg.seed = seed;
                 let progress = |i: usize| bar.set_position(i as u64);
-                let o = match &extracted {
-                    Some(e) => run_extracted(seq, e, &cfg, vocabulary, progress),
-                    None => run_sequence(seq, &cfg, vocabulary, progress),
+                let o = match (rerun.filter(|_| k == 0), &extracted) {
+                    (Some(file), e) => {
+                        record_run(file, loaded, e.as_ref(), &cfg, vocabulary, progress)?
+                    }
+                    (None, Some(e)) => run_extracted(seq, e, &cfg, vocabulary, progress),
+                    (None, None) => run_sequence(seq, &cfg, vocabulary, progress),
                 };
                 bar.finish_and_clear();
-                (seed, o)
+                Ok((seed, o))
             })
             .collect()
-    }))
+    })
+}
+
+/// The run of `config` over `loaded` recorded into `file` (`run --rerun`).
+#[cfg(feature = "rerun")]
+fn record_run(
+    file: &Path,
+    loaded: &Loaded,
+    extracted: Option<&ExtractedSequence>,
+    config: &Config,
+    vocabulary: Option<&Arc<Vocabulary>>,
+    progress: impl FnMut(usize),
+) -> Result<RunOutcome> {
+    crate::recording::record_run(
+        file,
+        &loaded.seq,
+        &loaded.images,
+        extracted,
+        config,
+        vocabulary,
+        progress,
+    )
+}
+
+/// Without the recording built in, `--rerun` is refused before the run (see `commands::run`).
+#[cfg(not(feature = "rerun"))]
+fn record_run(
+    _: &Path,
+    _: &Loaded,
+    _: Option<&ExtractedSequence>,
+    _: &Config,
+    _: Option<&Arc<Vocabulary>>,
+    _: impl FnMut(usize),
+) -> Result<RunOutcome> {
+    anyhow::bail!("{}", crate::recording::HOW_TO_GET_IT)
 }
 
 /// Writes each run's files (into `out`, or `out/seed<k>` for several runs, with the

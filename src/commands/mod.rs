@@ -18,4 +18,5 @@ pub mod shared_args;
 pub mod sweep;
 pub mod synth;
 pub mod table;
+pub mod view;
 pub mod vocab;

@@ -32,7 +32,7 @@ pub struct PlotArgs {
 }
 
 /// Splits `FILE=LABEL` (the last `=` when what follows names no existing file).
-fn split_label(arg: &str) -> (PathBuf, String) {
+pub(crate) fn split_label(arg: &str) -> (PathBuf, String) {
     if let Some((file, label)) = arg.rsplit_once('=') {
         if !file.is_empty() && !label.is_empty() && !Path::new(arg).exists() {
             return (PathBuf::from(file), label.to_string());

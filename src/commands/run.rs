@@ -73,6 +73,11 @@ pub struct RunArgs {
     /// perturbed copy).
     #[arg(long = "perturb-seed", default_value_t = 0, value_name = "S")]
     pub perturb_seed: u64,
+    /// Record the run (the first seed's, with --runs > 1) for the Rerun viewer: images,
+    /// keypoints by fate, the map, events and per-frame scalars, the estimate on the ground
+    /// truth (needs a binary built with `--features rerun`; open it with `rerun FILE.rrd`).
+    #[arg(long, value_name = "FILE.rrd")]
+    pub rerun: Option<PathBuf>,
     /// No progress bars.
     #[arg(long)]
     pub quiet: bool,
@@ -88,6 +93,16 @@ pub fn run(args: RunArgs) -> Result<()> {
         Some(p) => datasets::Catalog::load(p)?,
         None => datasets::Catalog::embedded(),
     };
+    if let Some(file) = &args.rerun {
+        crate::recording::output::check(file)?;
+        if !crate::recording::AVAILABLE {
+            bail!(
+                "--rerun {}: {}",
+                file.display(),
+                crate::recording::HOW_TO_GET_IT
+            );
+        }
+    }
     let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
     // Checked before anything is read.
     let chain =
@@ -138,7 +153,15 @@ pub fn run(args: RunArgs) -> Result<()> {
         );
     }
     let vocabulary = vocabulary.vocabulary.as_ref();
-    let results = run_seeds(&loaded, &config, vocabulary, &seeds, args.jobs, args.quiet)?;
+    let results = run_seeds(
+        &loaded,
+        &config,
+        vocabulary,
+        &seeds,
+        args.jobs,
+        args.quiet,
+        args.rerun.as_deref(),
+    )?;
     // An earlier run's files in the folder (its summary, or a multi-run's per-seed ones) are
     // replaced: said, so that a default `--out` never overwrites a result silently.
     let earlier = out.join("summary.json").exists()
@@ -147,6 +170,14 @@ pub fn run(args: RunArgs) -> Result<()> {
             .any(|s| out.join(format!("seed{s}")).join("summary.json").exists());
     let summaries = record(&loaded, cname, &results, &chain, args.perturb_seed, &out)?;
     summarise(&label, cname, &results, summaries, &out)?;
+    if let Some(file) = &args.rerun {
+        println!(
+            "recording: {} (seed {}); open it with `rerun {}`",
+            file.display(),
+            seeds[0],
+            file.display()
+        );
+    }
     if earlier {
         eprintln!(
             "note: replaced the files of an earlier run in {} (--out DIR keeps each run apart)",
