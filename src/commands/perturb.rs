@@ -1,14 +1,14 @@
 //! `noisefree perturb`: writes a perturbed copy of any sequence (catalogued, synthetic, or a
 //! folder) as a TUM RGB-D or EuRoC ASL folder that any SLAM program reads, with the camera as
-//! ORB-SLAM2 / ORB-SLAM3 settings beside it, and optionally a contact sheet (input | perturbed |
-//! perturbed depth or right image) of four frames.
+//! ORB-SLAM2 / ORB-SLAM3 settings beside it, and optionally a contact sheet of four frames
+//! (input beside perturbed, titled: [`crate::report::contact_sheet`]).
 
 use crate::commands::shared_args::SequenceArgs;
 use crate::select::{open, Source};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use perturb::{perturb_sequence, Chain, Domain, Family, NamedChain};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Arguments of `noisefree perturb`.
 #[derive(clap::Args, Debug)]
@@ -37,8 +37,9 @@ pub struct PerturbArgs {
         required_unless_present = "list"
     )]
     pub out: Option<PathBuf>,
-    /// Also write a contact sheet PNG: input | perturbed | perturbed depth (RGB-D) or right
-    /// image (stereo), four frames spread over the sequence.
+    /// Also write a contact sheet PNG: four frames spread over the sequence, input beside
+    /// perturbed (RGB-D: grey and depth of both; stereo: the perturbed right image too), with
+    /// column titles, frame numbers, the chain and the depth scale.
     #[arg(long = "contact-sheet", value_name = "FILE.png")]
     pub contact_sheet: Option<PathBuf>,
     /// The sequence's length, synthetic seed and ablated effects, and the data root.
@@ -158,10 +159,16 @@ pub fn run(args: PerturbArgs) -> Result<()> {
     .with_context(|| format!("writing {}", out.display()))?;
     bar.finish_and_clear();
     if let Some(sheet) = &args.contact_sheet {
-        write_sheet(
+        crate::report::contact_sheet::write(
             &input,
             &frames,
             &perturb_sources(&seq, &chain, args.perturb_seed, input.len())?,
+            &format!(
+                "{}: {} (perturbation seed {})",
+                source.label(),
+                chain.effective(),
+                args.perturb_seed
+            ),
             sheet,
         )?;
     }
@@ -187,68 +194,4 @@ fn perturb_sources(
 ) -> Result<Vec<usize>> {
     let p = perturb::Perturber::new(chain, &seq.camera, 5000.0, seed, input_len, &seq.name)?;
     Ok((0..p.len()).map(|i| p.source(i)).collect())
-}
-
-/// Half-resolution tiles of four frames: input | perturbed | perturbed depth or right image.
-fn write_sheet(
-    input: &datasets::FrameReader,
-    out: &datasets::FrameReader,
-    sources: &[usize],
-    path: &Path,
-) -> Result<()> {
-    let n = out.len();
-    let rows: Vec<usize> = (0..4.min(n)).map(|r| (r * n + n / 8) / 4.min(n)).collect();
-    let first = out.read(0)?;
-    let (w, h) = (first.image.width / 2, first.image.height / 2);
-    let gap = 4;
-    let mut img = image::RgbImage::from_pixel(
-        (3 * w + 4 * gap) as u32,
-        (rows.len() * (h + gap) + gap) as u32,
-        image::Rgb([255, 255, 255]),
-    );
-    for (r, &i) in rows.iter().enumerate() {
-        let (a, b) = (input.read(sources[i])?, out.read(i)?);
-        let depth_tile = |d: &slam_core::DepthImage| -> Vec<[u8; 3]> {
-            d.data
-                .iter()
-                .map(|&z| {
-                    if z <= 0.0 {
-                        [0, 0, 0]
-                    } else {
-                        let t = ((z - 0.4) / 4.6).clamp(0.0, 1.0);
-                        [
-                            (255.0 * (1.0 - t)) as u8,
-                            (255.0 * (1.0 - (2.0 * t - 1.0).abs())) as u8,
-                            (255.0 * t) as u8,
-                        ]
-                    }
-                })
-                .collect()
-        };
-        let grey = |g: &slam_core::GrayImage| -> Vec<[u8; 3]> {
-            g.data.iter().map(|&v| [v, v, v]).collect()
-        };
-        let third = match (&b.depth, &b.right) {
-            (Some(d), _) => depth_tile(d),
-            (None, Some(r)) => grey(r),
-            _ => grey(&b.image),
-        };
-        for (c, tile) in [grey(&a.image), grey(&b.image), third].iter().enumerate() {
-            let (x0, y0) = (gap + c * (w + gap), gap + r * (h + gap));
-            for y in 0..h {
-                for x in 0..w {
-                    let p = tile[(2 * y) * (2 * w) + 2 * x];
-                    img.put_pixel((x0 + x) as u32, (y0 + y) as u32, image::Rgb(p));
-                }
-            }
-        }
-    }
-    let mut bytes = Vec::new();
-    img.write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )
-    .context("encoding the contact sheet")?;
-    ate_eval::io::write_atomic(path, &bytes)?;
-    Ok(())
 }

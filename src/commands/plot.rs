@@ -96,7 +96,7 @@ pub fn run(args: PlotArgs) -> Result<()> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("creating {}", parent.display()))?;
     }
-    crate::report::figures::trajectories(&args.out, &title, &gt.trajectory, &curves)?;
+    crate::report::figures::trajectories(&args.out, &title, &gt.trajectory, &curves, &[])?;
     println!("wrote {0}.png and {0}.svg", args.out.display());
     Ok(())
 }

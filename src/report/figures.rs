@@ -48,10 +48,11 @@ pub(crate) fn write_png(path: &Path, size: (u32, u32), pixels: Vec<u8>) -> Resul
         .map_err(|e| anyhow!("writing {}: {e}", path.display()))
 }
 
-/// Draws the body into `<stem>.png` (1000 x 750) and `<stem>.svg`, each through a temporary
-/// file and a rename. A macro, because the body is instantiated once per backend type.
+/// Draws the body into `<stem>.png` and `<stem>.svg` of `size` pixels (width, height), each
+/// through a temporary file and a rename. A macro, because the body is instantiated once per
+/// backend type.
 macro_rules! both {
-    ($stem:expr, |$root:ident| $body:block) => {{
+    ($stem:expr, $size:expr, |$root:ident| $body:block) => {{
         register_font();
         let stem: &Path = $stem;
         if let Some(d) = stem.parent() {
@@ -59,10 +60,11 @@ macro_rules! both {
         }
         let tmp_png = stem.with_extension("tmp.png");
         let tmp_svg = stem.with_extension("tmp.svg");
+        let (w, h): (u32, u32) = $size;
         {
-            let mut pixels = vec![0u8; 1000 * 750 * 3];
+            let mut pixels = vec![0u8; w as usize * h as usize * 3];
             {
-                let area = BitMapBackend::with_buffer(&mut pixels, (1000, 750)).into_drawing_area();
+                let area = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
                 area.fill(&WHITE).map_err(err)?;
                 (|| -> Result<()> {
                     let $root = &area;
@@ -70,10 +72,10 @@ macro_rules! both {
                 })()?;
                 area.present().map_err(err)?;
             }
-            write_png(&tmp_png, (1000, 750), pixels)?;
+            write_png(&tmp_png, (w, h), pixels)?;
         }
         {
-            let area = SVGBackend::new(&tmp_svg, (1000, 750)).into_drawing_area();
+            let area = SVGBackend::new(&tmp_svg, (w, h)).into_drawing_area();
             area.fill(&WHITE).map_err(err)?;
             (|| -> Result<()> {
                 let $root = &area;
@@ -142,13 +144,15 @@ fn top_view_axes(gt: &Trajectory) -> (usize, usize) {
     (axes[0], axes[1])
 }
 
-/// Fig. 1: top view of the ground truth and of aligned estimates (`curves`: name, trajectory
-/// already in the ground-truth frame).
+/// Fig. 1: top view of the ground truth (black) and of aligned estimates (`curves`: name,
+/// trajectory already in the ground-truth frame), curve i in `colours[i]` (a system's own,
+/// [`system_colour`]) or, past them, the palette's.
 pub fn trajectories(
     stem: &Path,
     title: &str,
     gt: &Trajectory,
     curves: &[(String, Trajectory)],
+    colours: &[RGBColor],
 ) -> Result<()> {
     let (a, b) = top_view_axes(gt);
     let axis = ["x", "y", "z"];
@@ -166,7 +170,7 @@ pub fn trajectories(
     let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-3) * 1.1;
     let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
     let range = |k: usize| (c[k] - span / 2.0)..(c[k] + span / 2.0);
-    both!(stem, |root| {
+    both!(stem, (1000, 750), |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 26))
             .margin(20)
@@ -184,7 +188,10 @@ pub fn trajectories(
         let series = std::iter::once(("ground truth".to_string(), gt))
             .chain(curves.iter().map(|(n, t)| (n.clone(), t)));
         for (i, (name, t)) in series.enumerate() {
-            let color = PALETTE[i % PALETTE.len()];
+            let color = match i.checked_sub(1).and_then(|k| colours.get(k)) {
+                Some(c) => *c,
+                None => PALETTE[i % PALETTE.len()],
+            };
             let pts: Vec<(f64, f64)> = t.positions().iter().map(|p| (p[a], p[b])).collect();
             chart
                 .draw_series(LineSeries::new(
@@ -201,47 +208,90 @@ pub fn trajectories(
     })
 }
 
-/// Fig. 9: ATE of every run (dots) and the mean (bar) per sequence and configuration, on a
-/// logarithmic axis (synthetic presets span millimetres to decimetres; a linear axis flattens
-/// the easy ones to zero). Configurations in the paper's column order.
-/// `groups`: (sequence, configuration or its heading, ATEs of its runs), in column order.
-pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)]) -> Result<()> {
-    let mut seqs: Vec<String> = Vec::new();
-    let mut cfgs: Vec<String> = Vec::new();
-    for (s, c, _) in groups {
-        if !seqs.contains(s) {
-            seqs.push(s.clone());
-        }
-        if !cfgs.contains(c) {
-            cfgs.push(c.clone());
+/// The colour of a system in every figure of a folder, whatever else the figure shows: the
+/// paper's four columns and rc have their own, and any other column (a parameter value, a
+/// reading, an external program) one of a second set chosen by its name.
+pub fn system_colour(config: &str) -> RGBColor {
+    match config {
+        "orb" => RGBColor(214, 39, 40),
+        "mcor" => RGBColor(31, 119, 180),
+        "avc" => RGBColor(44, 160, 44),
+        "mcor+avc" => RGBColor(255, 127, 14),
+        "rc" => RGBColor(148, 103, 189),
+        other => {
+            const MORE: [RGBColor; 6] = [
+                RGBColor(140, 86, 75),
+                RGBColor(227, 119, 194),
+                RGBColor(188, 189, 34),
+                RGBColor(23, 190, 207),
+                RGBColor(127, 127, 127),
+                RGBColor(0, 0, 128),
+            ];
+            // FNV-1a: the same name, the same colour, on every machine.
+            let h = other.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+                (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+            });
+            MORE[(h % MORE.len() as u64) as usize]
         }
     }
-    let rank = |c: &str| {
-        ["orb", "mcor", "avc", "mcor+avc"]
-            .iter()
-            .position(|k| *k == c)
-            .unwrap_or(usize::MAX)
-    };
-    // Stable: configurations not named above (headings, external systems) keep the order the
-    // caller gave them in.
-    cfgs.sort_by_key(|c| rank(c));
+}
+
+/// One system's runs on one sequence, for [`ate_spread`].
+#[derive(Clone, Debug)]
+pub struct SpreadGroup {
+    /// The sequence (an x-axis label).
+    pub sequence: String,
+    /// The configuration's key (its colour, [`system_colour`]).
+    pub config: String,
+    /// Its heading in the tables (the legend).
+    pub label: String,
+    /// ATE of each run, metres.
+    pub ates: Vec<f64>,
+    /// The paper's figure for this cell, metres (`table --paper`), drawn beside the runs.
+    pub paper: Option<f64>,
+}
+
+/// Fig. 9: ATE of every run (dots) and the mean (bar) per sequence and system, in millimetres
+/// on a logarithmic axis (presets span millimetres to decimetres), each system in its colour,
+/// the paper's figure as a cross beside ours where it has one. Many sequences widen the figure
+/// and turn their names, so 31 rows stay legible. `groups` in column order.
+pub fn ate_spread(stem: &Path, title: &str, groups: &[SpreadGroup]) -> Result<()> {
+    let mut seqs: Vec<String> = Vec::new();
+    let mut cfgs: Vec<(String, String)> = Vec::new();
+    for g in groups {
+        if !seqs.contains(&g.sequence) {
+            seqs.push(g.sequence.clone());
+        }
+        if !cfgs.iter().any(|c| c.0 == g.config) {
+            cfgs.push((g.config.clone(), g.label.clone()));
+        }
+    }
+    let mm = |a: f64| a * 1e3;
     let positive = || {
         groups
             .iter()
-            .flat_map(|g| g.2.iter().copied())
+            .flat_map(|g| g.ates.iter().copied().chain(g.paper))
             .filter(|a| *a > 0.0 && a.is_finite())
+            .map(mm)
     };
-    let top = positive().fold(1e-4f64, f64::max) * 1.5;
+    let top = positive().fold(0.1f64, f64::max) * 1.5;
     let ymin = positive().fold(top, f64::min).min(top / 10.0) / 1.5;
-    // The top 28 % of the log axis is left to the legend (upper left), so no run hides under it.
-    const LEGEND: f64 = 0.28;
-    let ymax = ((top.ln() - LEGEND * ymin.ln()) / (1.0 - LEGEND)).exp();
+    // The top of the log axis is left to the legend (upper left), so no run hides under it.
+    let legend = (0.04 * (cfgs.len() + 1) as f64).clamp(0.2, 0.4);
+    let ymax = ((top.ln() - legend * ymin.ln()) / (1.0 - legend)).exp();
     let ncfg = cfgs.len().max(1) as f64;
-    both!(stem, |root| {
+    // Room per sequence for its columns of dots; turned names under many sequences.
+    let per_seq = (10.0 * ncfg).clamp(40.0, 120.0);
+    let width = (220.0 + per_seq * seqs.len() as f64).clamp(1000.0, 4000.0) as u32;
+    let turned = seqs.len() > 6;
+    let longest = seqs.iter().map(|s| s.chars().count()).max().unwrap_or(4) as u32;
+    let label_area = if turned { 25 + 9 * longest } else { 60 };
+    let any_paper = groups.iter().any(|g| g.paper.is_some());
+    both!(stem, (width, 700 + label_area), |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 26))
             .margin(20)
-            .x_label_area_size(60)
+            .x_label_area_size(label_area)
             .y_label_area_size(80)
             .build_cartesian_2d(-0.5f64..(seqs.len() as f64 - 0.5), (ymin..ymax).log_scale())
             .map_err(err)?;
@@ -250,30 +300,49 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(seqs.len().max(1))
-            .x_label_formatter(&|x| category_label(&seq_names, *x))
-            .y_desc("ATE RMSE [m], log scale")
-            .y_label_formatter(&|y| metres_label(*y))
+            .x_label_formatter(&|x| {
+                if turned {
+                    String::new()
+                } else {
+                    category_label(&seq_names, *x)
+                }
+            })
+            .y_desc("ATE RMSE [mm], log scale")
+            .y_label_formatter(&|y| mm_label(*y))
             .label_style(("sans-serif", 16))
             .draw()
             .map_err(err)?;
-        for (ci, cfg) in cfgs.iter().enumerate() {
-            let color = PALETTE[(ci + 1) % PALETTE.len()];
+        if turned {
+            // Turned names, each starting under its tick and running down, away from the axis
+            // (plotters centres turned tick labels on the tick, over the plot).
+            let style = TextStyle::from(
+                ("sans-serif", 16)
+                    .into_font()
+                    .transform(FontTransform::Rotate90),
+            );
+            for (k, name) in seqs.iter().enumerate() {
+                let (px, py) = chart.backend_coord(&(k as f64, ymin));
+                root.draw(&Text::new(name.clone(), (px + 8, py + 8), style.clone()))
+                    .map_err(err)?;
+            }
+        }
+        for (ci, (cfg, label)) in cfgs.iter().enumerate() {
+            let color = system_colour(cfg);
             let offset = (ci as f64 + 0.5) / ncfg * 0.8 - 0.4;
-            let mut dots = Vec::new();
-            let mut bars = Vec::new();
-            for (s, c, ates) in groups {
-                if c != cfg || ates.is_empty() {
-                    continue;
+            let (mut dots, mut bars, mut paper) = (Vec::new(), Vec::new(), Vec::new());
+            for g in groups.iter().filter(|g| &g.config == cfg) {
+                let x = seqs.iter().position(|q| *q == g.sequence).unwrap_or(0) as f64 + offset;
+                dots.extend(g.ates.iter().filter(|a| **a > 0.0).map(|&a| (x, mm(a))));
+                if !g.ates.is_empty() {
+                    let mean = g.ates.iter().sum::<f64>() / g.ates.len() as f64;
+                    bars.push(((x - 0.3 / ncfg, mm(mean)), (x + 0.3 / ncfg, mm(mean))));
                 }
-                let x = seqs.iter().position(|q| q == s).unwrap_or(0) as f64 + offset;
-                dots.extend(ates.iter().filter(|a| **a > 0.0).map(|&a| (x, a)));
-                let mean = ates.iter().sum::<f64>() / ates.len() as f64;
-                bars.push(((x - 0.3 / ncfg, mean), (x + 0.3 / ncfg, mean)));
+                paper.extend(g.paper.filter(|p| *p > 0.0).map(|p| (x, mm(p))));
             }
             chart
                 .draw_series(dots.iter().map(|&p| Circle::new(p, 4, color.filled())))
                 .map_err(err)?
-                .label(cfg.clone())
+                .label(label.clone())
                 .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
             chart
                 .draw_series(
@@ -281,6 +350,21 @@ pub fn ate_spread(stem: &Path, title: &str, groups: &[(String, String, Vec<f64>)
                         .map(|&(p, q)| PathElement::new(vec![p, q], color.stroke_width(3))),
                 )
                 .map_err(err)?;
+            chart
+                .draw_series(
+                    paper
+                        .iter()
+                        .map(|&p| Cross::new(p, 7, color.stroke_width(3))),
+                )
+                .map_err(err)?;
+        }
+        if any_paper {
+            // The legend's key for the crosses, drawn off the axis.
+            chart
+                .draw_series(std::iter::empty::<Cross<(f64, f64), i32>>())
+                .map_err(err)?
+                .label("the paper's figure (cross)")
+                .legend(|(x, y)| Cross::new((x + 10, y), 6, BLACK.stroke_width(3)));
         }
         draw_legend(&mut chart, RESULTS_LEGEND)
     })
@@ -325,7 +409,7 @@ pub fn relative_ate(
     let n = rows.len();
     let names: Vec<String> = rows.iter().map(|r| r.sequence.clone()).collect();
     let color = PALETTE[5];
-    both!(stem, |root| {
+    both!(stem, (1000, 750), |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 26))
             .margin(20)
@@ -397,19 +481,21 @@ fn category_label(names: &[String], x: f64) -> String {
     }
 }
 
-/// A tick label for metres on a log axis: as many decimals as the value needs (0.001, 0.02,
-/// 0.3, 2).
-fn metres_label(y: f64) -> String {
-    let decimals = (-y.log10().floor()).clamp(0.0, 6.0) as usize;
+/// A tick label for millimetres on a log axis: as many decimals as the value needs, and no
+/// "-0.0" or "20.0" (0.5, 2, 20, 300).
+fn mm_label(y: f64) -> String {
+    let decimals = (-y.log10().floor()).clamp(0.0, 3.0) as usize;
     format!("{y:.decimals$}")
 }
 
-/// Fig. 8: a per-frame quantity (e.g. outlier ratio) over frames, one curve per configuration.
+/// Fig. 8: a per-frame quantity (e.g. outlier ratio) over frames, one curve per configuration,
+/// curve i in `colours[i]` or, past them, the palette's.
 pub fn per_frame(
     stem: &Path,
     title: &str,
     y_desc: &str,
     series: &[(String, Vec<(f64, f64)>)],
+    colours: &[RGBColor],
 ) -> Result<()> {
     let xmax = series
         .iter()
@@ -420,7 +506,7 @@ pub fn per_frame(
         .flat_map(|s| s.1.iter().map(|p| p.1))
         .fold(1e-3f64, f64::max)
         * 1.1;
-    both!(stem, |root| {
+    both!(stem, (1000, 750), |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 26))
             .margin(20)
@@ -436,7 +522,10 @@ pub fn per_frame(
             .draw()
             .map_err(err)?;
         for (i, (name, pts)) in series.iter().enumerate() {
-            let color = PALETTE[(i + 1) % PALETTE.len()];
+            let color = colours
+                .get(i)
+                .copied()
+                .unwrap_or(PALETTE[(i + 1) % PALETTE.len()]);
             chart
                 .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
                 .map_err(err)?
@@ -485,7 +574,7 @@ pub fn resilience(
     const LEGEND: f64 = 0.3;
     let ymax = ((top.ln() - LEGEND * ymin.ln()) / (1.0 - LEGEND)).exp();
     let names: Vec<String> = levels.iter().map(|l| format!("{l}")).collect();
-    both!(stem, |root| {
+    both!(stem, (1000, 750), |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 26))
             .margin(20)
@@ -552,4 +641,47 @@ pub fn resilience(
         }
         draw_legend(&mut chart, RESULTS_LEGEND)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Table III's 31 rows and 9 columns: the figure widens so each row keeps room for its
+    /// columns and its name, and every system keeps its colour.
+    #[test]
+    fn a_31_row_spread_widens_and_each_system_keeps_its_colour() {
+        let configs = [
+            "orb", "mcor", "avc", "mcor+avc", "rc", "orbslam2", "orbslam3", "x", "y",
+        ];
+        let groups: Vec<SpreadGroup> = (0..31)
+            .flat_map(|s| {
+                configs.iter().map(move |c| SpreadGroup {
+                    sequence: format!("twin_sequence_{s:02}"),
+                    config: c.to_string(),
+                    label: c.to_string(),
+                    ates: vec![0.01 * (1 + s) as f64, 0.012 * (1 + s) as f64],
+                    paper: (*c == "orb").then_some(0.02),
+                })
+            })
+            .collect();
+        let dir = std::env::temp_dir().join(format!("nf-spread-{}", std::process::id()));
+        let stem = dir.join("ate_spread");
+        ate_spread(&stem, "31 rows", &groups).unwrap();
+        let img = image::open(stem.with_extension("png")).unwrap().to_rgb8();
+        assert!(img.width() >= 31 * 80, "{} px wide", img.width());
+        assert!(img.height() > 750, "room under the axis for turned names");
+        let red = system_colour("orb");
+        let has = |c: RGBColor| img.pixels().any(|p| p.0 == [c.0, c.1, c.2]);
+        assert!(has(red) && has(system_colour("mcor")) && has(system_colour("avc")));
+        assert_eq!(
+            system_colour("orb"),
+            RGBColor(214, 39, 40),
+            "the baseline is red everywhere"
+        );
+        assert_eq!(system_colour("mcor:paper"), system_colour("mcor:paper"));
+        assert_eq!(mm_label(20.0), "20");
+        assert_eq!(mm_label(0.5), "0.5");
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }

@@ -239,6 +239,12 @@ fn table3_findings(
         } else {
             v.to_string()
         };
+        // A verdict from fewer runs than the paper's ten says so.
+        let v = if r.runs < 10 {
+            format!("{v} (n = {}; the paper's n = 10)", r.runs)
+        } else {
+            v
+        };
         let point = if r.perturbation == "none" {
             "unperturbed".to_string()
         } else {
@@ -803,7 +809,12 @@ fn table4_findings(md: &mut String, dirs: &[PathBuf], base: &Path) -> Result<()>
         }
     }
     if !any {
-        md.push_str("No committed Table IV measured on an idle machine.\n");
+        md.push_str(
+            "No Table IV here was measured on an idle machine: the findings read Table IV from \
+             a folder named `table4-idle`, a sweep run alone on an otherwise idle machine \
+             (`noisefree sweep ... --jobs 1 --out results/table4-idle`); `noisefree bench --seq \
+             NAME` measures one sequence's cost per frame.\n",
+        );
     }
     md.push('\n');
     Ok(())

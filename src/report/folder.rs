@@ -159,7 +159,7 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         }
     }
     write_atomic(&dir.join("tables.md"), all.as_bytes())?;
-    figures_for(dir, &records, &labels)?;
+    figures_for(dir, &records, &labels, paper.then_some(catalog))?;
     write_index(dir, &all_records, &labels, &vocabularies, &index)?;
     Ok(all)
 }
@@ -441,6 +441,7 @@ pub fn figures_for(
     dir: &Path,
     records: &[crate::sweep::store::RunRecord],
     labels: &std::collections::BTreeMap<String, String>,
+    catalog: Option<&Catalog>,
 ) -> Result<()> {
     use crate::report::markdown::system_label;
     use crate::sweep::plan::ConfigKind;
@@ -487,11 +488,22 @@ pub fn figures_for(
                 ConfigKind::EVERY.iter().position(|e| *e == k).unwrap_or(0)
             })
         };
-        let mut named = groups.clone();
-        named.sort_by(|a, b| order(&a.1).cmp(&order(&b.1)).then(a.1.cmp(&b.1)));
-        for g in &mut named {
-            g.1 = system_label(&g.1, labels);
-        }
+        let mut sorted = groups.clone();
+        sorted.sort_by(|a, b| order(&a.1).cmp(&order(&b.1)).then(a.1.cmp(&b.1)));
+        let mut named: Vec<crate::report::figures::SpreadGroup> = sorted
+            .into_iter()
+            .map(
+                |(sequence, config, ates)| crate::report::figures::SpreadGroup {
+                    paper: catalog.and_then(|c| {
+                        crate::report::versus::paper_figures(c, &sequence, &config).map(|p| p.0)
+                    }),
+                    label: system_label(&config, labels),
+                    sequence,
+                    config,
+                    ates,
+                },
+            )
+            .collect();
         // Sequences keep the order of the records.
         let seq_order: Vec<&String> = {
             let mut v: Vec<&String> = Vec::new();
@@ -502,7 +514,7 @@ pub fn figures_for(
             }
             v
         };
-        named.sort_by_key(|g| seq_order.iter().position(|s| **s == g.0));
+        named.sort_by_key(|g| seq_order.iter().position(|s| **s == g.sequence));
         crate::report::figures::ate_spread(
             &fig.join("ate_spread"),
             "ATE RMSE over seeded runs",
@@ -521,6 +533,13 @@ pub fn figures_for(
             .iter()
             .find(|c| c.replace('+', "-") == tag)
             .map_or_else(|| tag.to_string(), |c| system_label(c, labels))
+    };
+    let colour = |tag: &str| {
+        let config = configs
+            .iter()
+            .find(|c| c.replace('+', "-") == tag)
+            .map_or(tag, |c| *c);
+        crate::report::figures::system_colour(config)
     };
     let traj_root = dir.join("trajectories");
     for seq_dir in subdirs(&traj_root) {
@@ -542,18 +561,20 @@ pub fn figures_for(
                         heading(&tag),
                         a.stats.rmse,
                         est.transformed(a.alignment.scale, &a.alignment.rt),
+                        colour(&tag),
                     ));
                 }
             }
             if let Ok(r) = outlier_ratio(&cfg_dir.join("frames_seed0.csv")) {
-                ratios.push((heading(&tag), r));
+                ratios.push((heading(&tag), r, colour(&tag)));
             }
         }
         // Legends in millimetres, with the digits that tell the curves apart.
         let d = crate::report::tables::mm_decimals(curves.iter().map(|c| c.1));
+        let colours: Vec<_> = curves.iter().map(|c| c.3).collect();
         let curves: Vec<(String, ate_eval::Trajectory)> = curves
             .into_iter()
-            .map(|(name, rmse, t)| (format!("{name} (ATE {:.d$} mm)", rmse * 1e3), t))
+            .map(|(name, rmse, t, _)| (format!("{name} (ATE {:.d$} mm)", rmse * 1e3), t))
             .collect();
         if let (Some(gt), false) = (&gt, curves.is_empty()) {
             crate::report::figures::trajectories(
@@ -561,14 +582,19 @@ pub fn figures_for(
                 &format!("{seq}: top view, seed 0"),
                 gt,
                 &curves,
+                &colours,
             )?;
         }
         if !ratios.is_empty() {
+            let colours: Vec<_> = ratios.iter().map(|r| r.2).collect();
+            let ratios: Vec<(String, Vec<(f64, f64)>)> =
+                ratios.into_iter().map(|(n, r, _)| (n, r)).collect();
             crate::report::figures::per_frame(
                 &fig.join(format!("outlier_ratio_{seq}")),
                 &format!("{seq}: outliers / matches per frame, seed 0"),
                 "outlier ratio",
                 &ratios,
+                &colours,
             )?;
         }
     }

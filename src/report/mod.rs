@@ -5,6 +5,7 @@
 //! tables (`tables`, `resilience`, `ablation`, `versus`), then `folder`, which writes them all.
 
 pub mod ablation;
+pub mod contact_sheet;
 pub mod figures;
 pub mod findings;
 pub mod folder;

@@ -415,7 +415,8 @@ fn table3_header(
 }
 
 /// A sequence's class as Table III prints it: the paper's easy / hard, a twin's "twin of" the
-/// class of the sequence it imitates, or "synthetic".
+/// class of the sequence it imitates, "synthetic" for another preset, "real" for another
+/// catalogued sequence, and "folder" for one the catalog does not name (`--path`).
 fn sequence_class(
     entry: Option<&datasets::catalog::Entry>,
     imitated: Option<&datasets::catalog::Entry>,
@@ -425,7 +426,11 @@ fn sequence_class(
         (Some(Class::Hard), _) => "hard",
         (None, Some(Class::Easy)) => "twin of easy",
         (None, Some(Class::Hard)) => "twin of hard",
-        (None, None) => "synthetic",
+        (None, None) => match entry {
+            Some(e) if e.preset.is_some() => "synthetic",
+            Some(_) => "real",
+            None => "folder",
+        },
     }
 }
 
@@ -1254,6 +1259,13 @@ mod tests {
         assert!(
             kinect.contains("synthetic") && !kinect.contains("215"),
             "{kinect}"
+        );
+        // A folder the catalog does not name is not called synthetic.
+        let catalog = Catalog::embedded();
+        assert_eq!(sequence_class(catalog.get("mine").ok(), None), "folder");
+        assert_eq!(
+            sequence_class(catalog.get("kinect").ok(), None),
+            "synthetic"
         );
         // rc has no published figure: its paper column would be all dashes, and is left out.
         let mut with_rc = records.to_vec();
