@@ -528,19 +528,16 @@ pub fn figures_for(
         v.dedup();
         v
     };
+    let of_tag = |tag: &str| config_of_tag(tag, &configs);
     let heading = |tag: &str| -> String {
-        configs
-            .iter()
-            .find(|c| c.replace('+', "-") == tag)
-            .map_or_else(|| tag.to_string(), |c| system_label(c, labels))
+        match of_tag(tag) {
+            Some((c, p)) if p.is_empty() => system_label(c, labels),
+            Some((c, p)) => format!("{}, {p}", system_label(c, labels)),
+            None => tag.to_string(),
+        }
     };
-    let colour = |tag: &str| {
-        let config = configs
-            .iter()
-            .find(|c| c.replace('+', "-") == tag)
-            .map_or(tag, |c| *c);
-        crate::report::figures::system_colour(config)
-    };
+    let colour =
+        |tag: &str| crate::report::figures::system_colour(of_tag(tag).map_or(tag, |(c, _)| c));
     let traj_root = dir.join("trajectories");
     for seq_dir in subdirs(&traj_root) {
         let seq = seq_dir
@@ -599,4 +596,61 @@ pub fn figures_for(
         }
     }
     Ok(())
+}
+
+/// The configuration of `configs` whose trajectories' folder is `tag`, with the parameters the
+/// tag adds, in words: the tag is the configuration's (`sweep::job::job_tag`) with MC-OR's
+/// thresholds (`_t0.7-0.7-0.5`) or AVC's b (`_b0.09`) where they were swept, read back so a
+/// figure's legend never shows the key.
+fn config_of_tag<'a>(tag: &str, configs: &[&'a str]) -> Option<(&'a str, String)> {
+    configs.iter().find_map(|c| {
+        let key = c
+            .replace('+', "-")
+            .replace(':', "_")
+            .replace(['=', '/'], "-");
+        let rest = tag.strip_prefix(key.as_str())?;
+        let number = |x: &str| x.parse::<f64>().is_ok();
+        let params: Option<Vec<String>> = rest
+            .split('_')
+            .skip(1)
+            .map(|p| match (p.strip_prefix('t'), p.strip_prefix('b')) {
+                (Some(t), _) if t.split('-').count() == 3 && t.split('-').all(number) => {
+                    Some(format!("tau {} m", t.replace('-', "/")))
+                }
+                (_, Some(b)) if number(b) => Some(format!("b = {b} m")),
+                _ => None,
+            })
+            .collect();
+        (rest.is_empty() || rest.starts_with('_'))
+            .then_some(())
+            .and(params)
+            .map(|p| (*c, p.join(", ")))
+    })
+}
+
+#[cfg(test)]
+mod tag_tests {
+    use super::config_of_tag;
+
+    #[test]
+    fn a_trajectory_folder_reads_back_as_its_configuration_and_parameters() {
+        let configs = ["avc", "mcor", "mcor+avc", "orb", "orb:b_role=camera"];
+        assert_eq!(
+            config_of_tag("avc_b0.09", &configs),
+            Some(("avc", "b = 0.09 m".into()))
+        );
+        assert_eq!(
+            config_of_tag("mcor_t0.7-0.7-0.5", &configs),
+            Some(("mcor", "tau 0.7/0.7/0.5 m".into()))
+        );
+        assert_eq!(
+            config_of_tag("mcor-avc", &configs),
+            Some(("mcor+avc", String::new()))
+        );
+        assert_eq!(
+            config_of_tag("orb_b_role-camera_b0.05", &configs),
+            Some(("orb:b_role=camera", "b = 0.05 m".into()))
+        );
+        assert_eq!(config_of_tag("orbslam3", &configs), None);
+    }
 }
