@@ -388,9 +388,44 @@ pub fn table3(
     let dropped = drop_empty_columns(&mut header, &mut rows, 2);
     let notes = table3_protocol_notes(records, &kinds, settings);
     let notes = table3_further_notes(notes, records, &systems, settings, vocabularies, &dropped);
+    let notes = match (paper, shorter_than_the_paper(records, catalog)) {
+        (true, short) if !short.is_empty() => format!(
+            "{notes} Shorter than the paper's runs: ours of {} cover only the first frames of the \
+             sequence the paper ran whole, so their figures and the paper's are not comparable.",
+            short.join(", ")
+        ),
+        _ => notes,
+    };
     let mut t = render("Table III: ATE RMSE (mm)", &notes, &header, &rows);
     t.csv = tidy_csv(&main_groups(records, catalog, &kinds, &systems), labels);
     t
+}
+
+/// The synthetic sequences of `records` run on fewer frames than the whole sequence (under 95 %
+/// of the preset's length), each as `name (F of N frames)`: beside the paper's figures, which are of
+/// whole sequences, a table must say so.
+fn shorter_than_the_paper(records: &[RunRecord], catalog: &Catalog) -> Vec<String> {
+    let mut out = Vec::new();
+    for seq in sequence_order(records, catalog) {
+        let Some(preset) = catalog.get(&seq).ok().and_then(|e| e.preset.clone()) else {
+            continue;
+        };
+        let Ok(p) = synth::Preset::from_name(&preset) else {
+            continue;
+        };
+        let ran = records
+            .iter()
+            .filter(|r| r.sequence == seq)
+            .map(|r| r.frames)
+            .max()
+            .unwrap_or(0);
+        // A whole twin loses a frame or three to pairing colour with depth: short means a
+        // run of under 95 % of the frames (`--frames`).
+        if ran > 0 && (ran as f64) < 0.95 * p.default_frames() as f64 {
+            out.push(format!("{seq} ({ran} of {} frames)", p.default_frames()));
+        }
+    }
+    out
 }
 
 /// Table III's headings: sequence, class, our configurations, the external systems, and with
@@ -1183,6 +1218,25 @@ mod tests {
             wall_s: 7.0,
             ..RunRecord::example(sequence, "orb", 0, ate)
         }
+    }
+
+    /// A run of the first 150 of a twin's 702 frames is named beside the paper's whole-sequence
+    /// figures; a whole run (short of a frame or two of pairing) and a folder are not.
+    #[test]
+    fn runs_shorter_than_the_paper_s_are_named() {
+        let catalog = Catalog::embedded();
+        let short = RunRecord {
+            frames: 150,
+            ..record("twin_fr1_desk", 0.01)
+        };
+        let whole = record("twin_fr1_xyz", 0.01);
+        let whole = RunRecord {
+            frames: 900,
+            ..whole
+        };
+        let folder = record("mine", 0.01);
+        let named = shorter_than_the_paper(&[short, whole, folder], &catalog);
+        assert_eq!(named, vec!["twin_fr1_desk (150 of 702 frames)".to_string()]);
     }
 
     #[test]
