@@ -28,16 +28,18 @@ test:
 RERUN_VENV := target/rerun-venv
 RERUN_SDK := rerun-sdk==0.36.3
 
-$(RERUN_VENV)/bin/python:
+# The marker is written only once the install succeeded, so an interrupted one is redone.
+$(RERUN_VENV)/.installed:
 	python3 -m venv $(RERUN_VENV)
 	$(RERUN_VENV)/bin/pip install --quiet $(RERUN_SDK)
+	touch $@
 
-view: $(RERUN_VENV)/bin/python
+view: $(RERUN_VENV)/.installed
 	cargo build --release --features rerun
 	@echo "record: ./target/release/noisefree run --seq walking --mcor --rerun walking.rrd"
 	@echo "open:   $(RERUN_VENV)/bin/rerun walking.rrd"
 
-test-rerun: $(RERUN_VENV)/bin/python
+test-rerun: $(RERUN_VENV)/.installed
 	NOISEFREE_RERUN_PYTHON=$(CURDIR)/$(RERUN_VENV)/bin/python cargo test --features rerun --test rerun_cli
 
 bench:
