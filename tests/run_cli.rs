@@ -375,10 +375,14 @@ fn the_camera_of_a_folder_is_said_and_a_guess_is_a_warning_saying_how_to_give_it
     }
     let named = root.join("rgbd_dataset_freiburg1_mine");
     std::fs::rename(&own, &named).unwrap();
-    let (said, _) = run(&named, "named", &[]);
+    let (said, by_name) = run(&named, "named", &[]);
     assert!(
         said.contains("TUM Fr1's") && said.contains("from the folder's name"),
         "{said}"
+    );
+    assert_eq!(
+        by_itself, by_name,
+        "the folder's own camera file gives the trajectory its TUM name gives"
     );
     let bare = root.join("bare");
     std::fs::rename(&named, &bare).unwrap();
