@@ -401,6 +401,20 @@ pub struct Observation<'a> {
     pub optimizations: &'a [PoseOptRecord],
 }
 
+#[cfg_attr(not(feature = "rerun"), allow(dead_code))]
+impl Observation<'_> {
+    /// The frame's final pose optimization (its last), with each match's fate; `None` when
+    /// the frame was not tracked.
+    pub fn final_optimization(&self) -> Option<&PoseOptRecord> {
+        let id = self.system.last_frame()?.id;
+        self.optimizations
+            .iter()
+            .rev()
+            .find(|r| r.frame_id == id)
+            .filter(|_| self.result.state.is_tracked())
+    }
+}
+
 /// As [`run_sequence`] (or [`run_extracted`] with `extracted`), calling `observe` after every
 /// frame with what the frame did (a recording of the run, `run --rerun`). Observing reads only:
 /// the trajectory is the unobserved run's, bit for bit.

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use ate_eval::io::{self, Format};
-use ate_eval::{evaluate_ate, AlignmentMode, AteOptions, StampPolicy};
+use ate_eval::{evaluate_ate, AlignmentMode, AteOptions, StampPolicy, Trajectory};
 
 /// Arguments of `noisefree plot`.
 #[derive(clap::Args, Debug)]
@@ -32,7 +32,7 @@ pub struct PlotArgs {
 }
 
 /// Splits `FILE=LABEL` (the last `=` when what follows names no existing file).
-pub(crate) fn split_label(arg: &str) -> (PathBuf, String) {
+fn split_label(arg: &str) -> (PathBuf, String) {
     if let Some((file, label)) = arg.rsplit_once('=') {
         if !file.is_empty() && !label.is_empty() && !Path::new(arg).exists() {
             return (PathBuf::from(file), label.to_string());
@@ -46,44 +46,74 @@ pub(crate) fn split_label(arg: &str) -> (PathBuf, String) {
     (path, label)
 }
 
-/// Runs `noisefree plot`.
-pub fn run(args: PlotArgs) -> Result<()> {
-    if !(args.max_diff.is_finite() && args.max_diff > 0.0) {
-        bail!(
-            "--max-diff must be a positive number of seconds, got {}",
-            args.max_diff
-        );
+/// What `plot` and `view` draw: the ground truth, each estimate (file, label, trajectory) as
+/// `eval` reads them (a warning line per repaired file), and the alignment of `--max-diff` and
+/// `--scale`.
+pub(crate) struct Inputs {
+    /// The ground truth.
+    pub gt: Trajectory,
+    /// Each estimate: its file, its label and its trajectory, in the order given.
+    pub estimates: Vec<(PathBuf, String, Trajectory)>,
+    /// Association and alignment, as `eval` does them.
+    pub options: AteOptions,
+}
+
+/// Reads `gt` and every `FILE[=LABEL]` of `estimates`, refusing a `max_diff` that is not a
+/// positive number of seconds.
+pub(crate) fn read_inputs(
+    gt: &Path,
+    estimates: &[String],
+    max_diff: f64,
+    scale: bool,
+) -> Result<Inputs> {
+    if !(max_diff.is_finite() && max_diff > 0.0) {
+        bail!("--max-diff must be a positive number of seconds, got {max_diff}");
     }
     let policy = StampPolicy::for_association(ate_eval::AssociationMode::Tum);
-    let gt = io::read_trajectory(&args.gt, Format::guess(&args.gt), None, policy)?;
-    for w in &gt.warnings {
-        eprintln!("warning: {w}");
-    }
+    let read = |p: &Path| -> Result<Trajectory> {
+        let t = io::read_trajectory(p, Format::guess(p), None, policy)?;
+        for w in &t.warnings {
+            eprintln!("warning: {w}");
+        }
+        Ok(t.trajectory)
+    };
+    let gt = read(gt)?;
+    let estimates = estimates
+        .iter()
+        .map(|arg| {
+            let (path, label) = split_label(arg);
+            let est = read(&path)?;
+            Ok((path, label, est))
+        })
+        .collect::<Result<_>>()?;
     let options = AteOptions {
-        max_difference: args.max_diff,
-        alignment: if args.scale {
+        max_difference: max_diff,
+        alignment: if scale {
             AlignmentMode::Sim3
         } else {
             AlignmentMode::Se3
         },
         ..AteOptions::default()
     };
+    Ok(Inputs {
+        gt,
+        estimates,
+        options,
+    })
+}
+
+/// Runs `noisefree plot`.
+pub fn run(args: PlotArgs) -> Result<()> {
+    let inputs = read_inputs(&args.gt, &args.estimates, args.max_diff, args.scale)?;
     let mut curves = Vec::new();
-    for arg in &args.estimates {
-        let (path, label) = split_label(arg);
-        let est = io::read_trajectory(&path, Format::guess(&path), None, policy)?;
-        for w in &est.warnings {
-            eprintln!("warning: {w}");
-        }
-        let ate = evaluate_ate(&gt.trajectory, &est.trajectory, &options)
+    for (path, label, est) in &inputs.estimates {
+        let ate = evaluate_ate(&inputs.gt, est, &inputs.options)
             .with_context(|| format!("aligning {} to {}", path.display(), args.gt.display()))?;
         println!(
             "{label}: ATE RMSE {:.4} m over {} poses",
             ate.stats.rmse, ate.stats.count
         );
-        let aligned = est
-            .trajectory
-            .transformed(ate.alignment.scale, &ate.alignment.rt);
+        let aligned = est.transformed(ate.alignment.scale, &ate.alignment.rt);
         curves.push((format!("{label} (ATE {:.3} m)", ate.stats.rmse), aligned));
     }
     let title = args.title.unwrap_or_else(|| {
@@ -96,7 +126,7 @@ pub fn run(args: PlotArgs) -> Result<()> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("creating {}", parent.display()))?;
     }
-    crate::report::figures::trajectories(&args.out, &title, &gt.trajectory, &curves, &[])?;
+    crate::report::figures::trajectories(&args.out, &title, &inputs.gt, &curves, &[])?;
     println!("wrote {0}.png and {0}.svg", args.out.display());
     Ok(())
 }

@@ -148,12 +148,7 @@ mod tests {
             |_| {},
             |o| {
                 let frame = o.system.last_frame().expect("a frame");
-                let last = o
-                    .optimizations
-                    .iter()
-                    .rev()
-                    .find(|r| r.frame_id == frame.id)
-                    .filter(|_| o.result.state.is_tracked());
+                let last = o.final_optimization();
                 let fates = keypoint_fates(frame, last);
                 assert_eq!(fates.len(), o.result.stats.n_keypoints);
                 let n = counts(&fates);

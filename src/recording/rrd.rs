@@ -131,13 +131,7 @@ fn frame(rec: &RecordingStream, images: &FrameReader, o: &Observation<'_>) -> Re
     let Some(frame) = o.system.last_frame() else {
         return Ok(());
     };
-    let last = o
-        .optimizations
-        .iter()
-        .rev()
-        .find(|r| r.frame_id == frame.id)
-        .filter(|_| o.result.state.is_tracked());
-    let fates = keypoint_fates(frame, last);
+    let fates = keypoint_fates(frame, o.final_optimization());
     for fate in Fate::ALL {
         let points: Vec<[f32; 2]> = fates
             .iter()
@@ -262,13 +256,8 @@ fn trajectory(rec: &RecordingStream, seq: &Sequence, outcome: &RunOutcome) -> Re
         .enumerate()
         .map(|(i, s)| (s.timestamp.to_bits(), i))
         .collect();
-    let ate = seq.groundtruth.as_ref().and_then(|gt| {
-        let scored = match &seq.t_bs {
-            Some(t_bs) => est.cam_to_body(t_bs),
-            None => est.clone(),
-        };
-        evaluate_ate(gt, &scored, &AteOptions::default()).ok()
-    });
+    // The run's own score ([`crate::runner`]): the alignment and errors `eval` gives.
+    let ate = &outcome.ate;
     let alignment = ate
         .as_ref()
         .map_or(Isometry3::identity(), |a| a.alignment.rt);
