@@ -190,6 +190,75 @@ mod recorded {
             .map(|(_, n)| n)
             .sum();
         assert!(mcor > 0, "at least one MC-OR rejection");
+        // Each MC-OR rejection is labelled with the thresholds it exceeded.
+        let mut labels = Vec::new();
+        for f in ["mcor_cluster", "mcor_feature"] {
+            let e = &s[format!("/world/slam/camera/image/keypoints/{f}")];
+            labels.extend(e["labels"].as_array().unwrap().iter().cloned());
+        }
+        assert!(!labels.is_empty(), "MC-OR rejections carry labels");
+        for l in &labels {
+            let l = l.as_str().unwrap();
+            let names = ["tau_MF", "tau_GF", "tau_MG"];
+            assert!(
+                !l.is_empty() && l.split(' ').all(|t| names.contains(&t)),
+                "label {l:?}"
+            );
+        }
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    /// A run under AVC and a depth perturbation records what the system read: every depth image
+    /// differs from the unperturbed run's and every colour image is the same; and AVC's virtual
+    /// cameras of a few matches per tracked frame, two rays each.
+    #[test]
+    fn a_perturbed_avc_run_records_the_perturbed_images_and_the_virtual_cameras() {
+        let dir = tmpdir("rerun-perturbed");
+        std::fs::create_dir_all(&dir).unwrap();
+        let record = |name: &str, extra: &[&str]| {
+            let rrd = dir.join(format!("{name}.rrd"));
+            let out = dir.join(name);
+            let (rrd_s, out_s) = (rrd.to_str().unwrap(), out.to_str().unwrap());
+            let mut args = vec![
+                "run", "--seq", "walking", "--frames", "12", "--avc", "--quiet", "--out", out_s,
+                "--rerun", rrd_s,
+            ];
+            args.extend_from_slice(extra);
+            noisefree_ok(&args);
+            summary(&rrd)
+        };
+        let plain = record("plain", &[]);
+        let perturbed = record("perturbed", &["--perturb", "depth-axial:8"]);
+        let digests = |s: &Value, image: &str| -> Vec<String> {
+            let e = &s[format!("/world/slam/camera/image/{image}")];
+            let d: Vec<String> = e["digests"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_str().unwrap().to_string())
+                .collect();
+            assert_eq!(d.len(), 12, "{image}: one image per frame");
+            d
+        };
+        assert_eq!(digests(&plain, "colour"), digests(&perturbed, "colour"));
+        let (a, b) = (digests(&plain, "depth"), digests(&perturbed, "depth"));
+        for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+            assert_ne!(a, b, "frame {i}: the perturbed depth is recorded");
+        }
+        let cameras = per_frame(&perturbed, "world/slam/camera/avc/virtual_cameras");
+        assert!(cameras.len() >= 10, "virtual cameras on tracked frames");
+        assert!(
+            cameras.values().all(|&n| (1..=8).contains(&n)),
+            "{cameras:?}"
+        );
+        let rays = per_frame(&perturbed, "world/slam/camera/avc/rays");
+        for (f, n) in &cameras {
+            assert_eq!(
+                rays.get(f),
+                Some(&(2 * n)),
+                "frame {f}: two rays per camera"
+            );
+        }
         let _ = std::fs::remove_dir_all(dir);
     }
 

@@ -6,6 +6,7 @@ tests/rerun_cli.rs to read back what `noisefree run --rerun` and `noisefree view
 
 Usage: rrd_summary.py FILE.rrd
 """
+import hashlib
 import json
 import sys
 
@@ -17,7 +18,8 @@ def main(path):
     for chunk in RrdReader(path).stream():
         batch = chunk.to_record_batch()
         entry = out.setdefault(
-            chunk.entity_path, {"static": False, "frames": [], "instances": [], "components": []}
+            chunk.entity_path,
+            {"static": False, "frames": [], "instances": [], "components": [], "digests": [], "labels": []},
         )
         entry["static"] = entry["static"] or chunk.is_static
         names = batch.schema.names
@@ -33,6 +35,16 @@ def main(path):
         if lists:
             col = batch.column(lists[0]).to_pylist()
             counts = [len(v) if isinstance(v, list) else (0 if v is None else 1) for v in col]
+        blobs = [n for n in names if n.endswith(":blob")]
+        if blobs:
+            col = batch.column(blobs[0]).to_pylist()
+            entry["digests"].extend(hashlib.md5(repr(v).encode()).hexdigest() for v in col)
+        for n in names:
+            if n.endswith(":labels"):
+                for v in batch.column(n).to_pylist():
+                    for label in v or []:
+                        if label not in entry["labels"]:
+                            entry["labels"].append(label)
         entry["frames"].extend(frames)
         entry["instances"].extend(counts)
     json.dump(out, sys.stdout)

@@ -2,6 +2,7 @@
 //! ([`record_run`]) and any trajectory files beside a ground truth ([`view`]). Entity paths:
 //! [`super::ENTITY_PATHS`].
 
+use super::avc::{sample_virtual_cameras, VirtualCameraSample};
 use super::fate::{keypoint_fates, Fate};
 use super::output;
 use crate::runner::{run_observed, ExtractedSequence, Observation, RunOutcome};
@@ -131,23 +132,36 @@ fn frame(rec: &RecordingStream, images: &FrameReader, o: &Observation<'_>) -> Re
     let Some(frame) = o.system.last_frame() else {
         return Ok(());
     };
-    let fates = keypoint_fates(frame, o.final_optimization());
+    let last = o.final_optimization();
+    let fates = keypoint_fates(frame, last);
+    // Which thresholds each MC-OR rejection exceeded, by keypoint.
+    let exceeded: HashMap<usize, String> = last
+        .map_or(&[][..], |r| &r.matches[..])
+        .iter()
+        .filter(|m| m.mcor_exceeded.any())
+        .map(|m| (m.keypoint, m.mcor_exceeded.names()))
+        .collect();
     for fate in Fate::ALL {
-        let points: Vec<[f32; 2]> = fates
+        let (points, labels): (Vec<[f32; 2]>, Vec<String>) = fates
             .iter()
             .zip(&frame.features.keypoints)
-            .filter(|(f, _)| **f == fate)
-            .map(|(_, k)| [k.x, k.y])
-            .collect();
-        rec.log(
-            format!("{root}/keypoints/{}", fate.name()),
-            &rerun::Points2D::new(points)
-                .with_colors([rerun::Color::from_rgb(
-                    fate.colour()[0],
-                    fate.colour()[1],
-                    fate.colour()[2],
-                )])
-                .with_radii([2.5]),
+            .enumerate()
+            .filter(|(_, (f, _))| **f == fate)
+            .map(|(i, (_, k))| ([k.x, k.y], exceeded.get(&i).cloned().unwrap_or_default()))
+            .unzip();
+        let [r, g, b] = fate.colour();
+        let mut points = rerun::Points2D::new(points)
+            .with_colors([rerun::Color::from_rgb(r, g, b)])
+            .with_radii([2.5]);
+        if matches!(fate, Fate::McorCluster | Fate::McorFeature) {
+            points = points.with_labels(labels).with_show_labels(false);
+        }
+        rec.log(format!("{root}/keypoints/{}", fate.name()), &points)?;
+    }
+    if let (Some(avc), Some(last)) = (&o.system.config().avc, last) {
+        virtual_cameras(
+            rec,
+            &sample_virtual_cameras(frame, last, o.system.camera(), avc.baseline),
         )?;
     }
     for (name, v) in [
@@ -177,6 +191,37 @@ fn frame(rec: &RecordingStream, images: &FrameReader, o: &Observation<'_>) -> Re
     if stats.keyframe_inserted {
         map(rec, o)?;
     }
+    Ok(())
+}
+
+/// AVC's virtual cameras of a frame's sampled matches, in the camera's frame: the centres C',
+/// and from each a ray to the measured point D (yellow) and to the map point M (cyan).
+fn virtual_cameras(rec: &RecordingStream, samples: &[VirtualCameraSample]) -> Result<()> {
+    let f32s = |v: &nalgebra::Vector3<f64>| -> [f32; 3] { v.map(|x| x as f32).into() };
+    let centres: Vec<[f32; 3]> = samples.iter().map(|s| f32s(&s.centre)).collect();
+    rec.log(
+        "world/slam/camera/avc/virtual_cameras",
+        &rerun::Points3D::new(centres)
+            .with_colors([rerun::Color::from_rgb(255, 220, 0)])
+            .with_radii([0.005])
+            .with_labels(
+                samples
+                    .iter()
+                    .map(|s| format!("C' of keypoint {}", s.keypoint)),
+            ),
+    )?;
+    let mut rays = Vec::new();
+    let mut colours = Vec::new();
+    for s in samples {
+        rays.push(vec![f32s(&s.centre), f32s(&s.measured)]);
+        colours.push(rerun::Color::from_rgb(255, 220, 0));
+        rays.push(vec![f32s(&s.centre), f32s(&s.map_point)]);
+        colours.push(rerun::Color::from_rgb(0, 220, 255));
+    }
+    rec.log(
+        "world/slam/camera/avc/rays",
+        &rerun::LineStrips3D::new(rays).with_colors(colours),
+    )?;
     Ok(())
 }
 

@@ -40,7 +40,7 @@ use crate::techniques::rigid_consensus::{
     nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
 };
 use crate::techniques::{
-    ClusterFeature, FrameView, McorCluster, McorOutcome, McorVerdict, VirtualCameraRef,
+    ClusterFeature, Exceeded, FrameView, McorCluster, McorOutcome, McorVerdict, VirtualCameraRef,
     VirtualCameraResidual,
 };
 
@@ -378,6 +378,9 @@ pub struct PoseOptMatch {
     pub inlier: bool,
     /// MC-OR's verdict at the last gating (before the last round); `None` when MC-OR is off.
     pub mcor: Option<McorVerdict>,
+    /// For an MC-OR rejection, which thresholds its metrics exceeded at that gating (none
+    /// otherwise).
+    pub mcor_exceeded: Exceeded,
 }
 
 /// What one call of [`optimize_frame_pose`] did, as recorded by [`tap_pose_optimizations`]:
@@ -622,7 +625,7 @@ pub fn optimize_frame_pose(
     let aimed_from = std::cell::Cell::new(Some(pose_bits(&initial)));
     let optimize = |start: &Isometry3<f64>, veto: Option<&[bool]>| {
         let mut last_gate = (0, 0);
-        let mut last_verdicts: Option<Vec<McorVerdict>> = None;
+        let mut last_verdicts: Option<Vec<(McorVerdict, Exceeded)>> = None;
         // Hook point 2, before every round with the latest pose: re-aim the virtual cameras,
         // then re-run MC-OR (an observation rejected at a poor early pose may come back).
         let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [Admission]| {
@@ -665,7 +668,15 @@ pub fn optimize_frame_pose(
                     }
                     *e = admission(params, verdict, shared.cluster(id), p.is_some());
                     if tapped {
-                        verdicts.push(verdict);
+                        // Which thresholds failed: the fast verdict stops at the first.
+                        let exceeded = match verdict {
+                            McorVerdict::Kept => Exceeded::default(),
+                            _ => {
+                                let metrics = shared.cluster(id).metrics(params, &twc, p.as_ref());
+                                Exceeded::of(params, &metrics, verdict)
+                            }
+                        };
+                        verdicts.push((verdict, exceeded));
                     }
                 }
                 if tapped {
@@ -728,7 +739,10 @@ pub fn optimize_frame_pose(
                     map_point: frame.map_points[i].expect("matched"),
                     point_world: obs[k].point_world,
                     inlier: result.inliers[k],
-                    mcor: last_verdicts.as_ref().map(|v| v[k]),
+                    mcor: last_verdicts.as_ref().map(|v| v[k].0),
+                    mcor_exceeded: last_verdicts
+                        .as_ref()
+                        .map_or_else(Exceeded::default, |v| v[k].1),
                 })
                 .collect(),
         });
@@ -1139,6 +1153,14 @@ mod tests {
             .map(|m| m.keypoint)
             .collect();
         assert_eq!(rejected, gross);
+        // Each rejection names the thresholds it exceeded; a kept match names none.
+        for m in &r.matches {
+            assert_eq!(m.mcor_exceeded.any(), m.mcor != Some(McorVerdict::Kept));
+            assert!(
+                !m.mcor_exceeded.tau_mg,
+                "a feature rejection is FL: tau_MF, tau_GF"
+            );
+        }
         for m in &r.matches {
             assert_eq!(frame.outliers[m.keypoint], !m.inlier);
         }

@@ -417,6 +417,61 @@ pub fn feature_passes(params: &McorParams, f: &FeatureMetrics) -> bool {
     !(f.to_map_point > params.tau_mf || f.to_centroid > params.tau_gf)
 }
 
+/// Which of Algorithm 1's thresholds a rejected match exceeded: what a recording of the run
+/// shows beside the rejection (`run --rerun`). For a cluster rejection the CL metrics against
+/// tau_MF, tau_GF and tau_MG; for a feature rejection the FL metrics against tau_MF and tau_GF.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Exceeded {
+    /// CL1 (or FL1) above tau_MF.
+    pub tau_mf: bool,
+    /// CL2 (or FL2) above tau_GF.
+    pub tau_gf: bool,
+    /// CL3 above tau_MG (cluster rejections only).
+    pub tau_mg: bool,
+}
+
+impl Exceeded {
+    /// The thresholds `metrics` exceed for a match whose verdict was `verdict` (none when kept,
+    /// or for a feature rejection without a current feature).
+    pub fn of(params: &McorParams, metrics: &McorMetrics, verdict: McorVerdict) -> Self {
+        match verdict {
+            McorVerdict::Kept => Self::default(),
+            McorVerdict::RejectedCluster => {
+                let c = &metrics.cluster;
+                Self {
+                    tau_mf: c.mean_to_map_point > params.tau_mf,
+                    tau_gf: c.mean_to_centroid > params.tau_gf,
+                    tau_mg: c.map_point_to_centroid > params.tau_mg,
+                }
+            }
+            McorVerdict::RejectedFeature => metrics.current.map_or(Self::default(), |f| Self {
+                tau_mf: f.to_map_point > params.tau_mf,
+                tau_gf: f.to_centroid > params.tau_gf,
+                tau_mg: false,
+            }),
+        }
+    }
+
+    /// Whether any threshold is exceeded.
+    pub fn any(&self) -> bool {
+        self.tau_mf || self.tau_gf || self.tau_mg
+    }
+
+    /// The exceeded thresholds by the paper's names, e.g. `"tau_MF tau_MG"` (empty when none).
+    pub fn names(&self) -> String {
+        [
+            (self.tau_mf, "tau_MF"),
+            (self.tau_gf, "tau_GF"),
+            (self.tau_mg, "tau_MG"),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect::<Vec<_>>()
+        .join(" ")
+    }
+}
+
 /// One match of the frame being tracked: its map point's cluster and position, and the
 /// keypoint back-projected with its measured depth in the frame's camera (`None` without depth).
 #[derive(Clone, Copy, Debug)]

@@ -22,6 +22,7 @@
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
 use super::mcor::{ClusterFeature, McorVerdict, MCOR_CLUSTER_CAPACITY};
+use super::mcor::{ClusterMetrics, FeatureMetrics, McorMetrics};
 use crate::ids::MapPointId;
 use crate::techniques::params::{ClusterViews, McorParams};
 
@@ -212,6 +213,52 @@ impl PreparedCluster {
         point_camera: Option<&Vector3<f64>>,
     ) -> (McorVerdict, f64) {
         self.judge::<true>(params, twc, point_camera)
+    }
+
+    /// Every metric of Algorithm 1 for a match of this cluster (as [`verdict`](Self::verdict)
+    /// takes it), computed in full: the verdict's fast path stops at the first metric that
+    /// decides, so this is what tells which thresholds a rejection exceeded
+    /// ([`Exceeded`](super::mcor::Exceeded)). For analysis (a tapped run), not the gate.
+    pub fn metrics(
+        &self,
+        params: &McorParams,
+        twc: &Isometry3<f64>,
+        point_camera: Option<&Vector3<f64>>,
+    ) -> McorMetrics {
+        let ring = &self.features[self.ring_start..];
+        let cur = point_camera.map(|p| RingFeature {
+            point_world: (twc * Point3::from(*p)).coords,
+            depth: p.z,
+            to_map_point: 0.0,
+        });
+        let with_current = usize::from(cur.is_some());
+        let mut sum = self.ring_sum;
+        if let Some(f) = &cur {
+            sum += f.point_world;
+        }
+        let g = sum / self.total_f64[with_current];
+        let m = &self.map_point;
+        let (cl1, cl2, cl3) = exact_metrics(m, &g, ring, cur.as_ref(), params.depth_normalised);
+        McorMetrics {
+            cluster: ClusterMetrics {
+                mean_to_map_point: cl1,
+                mean_to_centroid: cl2,
+                map_point_to_centroid: cl3,
+                centroid: g,
+                n_features: ring.len() + with_current,
+            },
+            current: cur.map(|f| {
+                let scale = if params.depth_normalised {
+                    1.0 / f.depth
+                } else {
+                    1.0
+                };
+                FeatureMetrics {
+                    to_map_point: (m - f.point_world).norm() * scale,
+                    to_centroid: (g - f.point_world).norm() * scale,
+                }
+            }),
+        }
     }
 
     /// The verdict, and with `REACH` its reach (else 0): one body, so that both give the same
@@ -558,7 +605,7 @@ impl GateMemo {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::techniques::mcor::{mcor_gate, McorCluster, McorMatch};
+    use crate::techniques::mcor::{mcor_gate, Exceeded, McorCluster, McorMatch};
     use crate::techniques::mcor_views::FRAME_VIEW_SOURCE_BIT;
     use crate::techniques::test_support::{gaussian, rng};
     use nalgebra::{Translation3, UnitQuaternion};
@@ -755,6 +802,15 @@ mod tests {
                 prepared.features.len(),
                 prepared.n_keyframe
             );
+            // The full metrics are the slow path's, and a rejection names a threshold its
+            // metrics exceed (a feature rejection never tau_MG).
+            let full = prepared.metrics(&params, &twc, gate_point(current).as_ref());
+            if let Some(slow) = cluster.metrics(&m, cur.as_ref(), params.depth_normalised) {
+                assert_eq!(full, slow, "trial {trial}");
+            }
+            let exceeded = Exceeded::of(&params, &full, got);
+            assert_eq!(exceeded.any(), got != McorVerdict::Kept, "trial {trial}");
+            assert!(!(got == McorVerdict::RejectedFeature && exceeded.tau_mg));
             rejected[match got {
                 McorVerdict::Kept => 0,
                 McorVerdict::RejectedCluster => 1,

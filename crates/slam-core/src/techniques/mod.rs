@@ -31,8 +31,8 @@ pub use avc::{avc_measurement, virtual_camera_direction, VirtualCameraRef, Virtu
 pub use correlation::{correlation_analysis, error_terms, pearson, CorrelationTable, ErrorTerms};
 pub use mcor::{
     cluster_passes, feature_metrics, feature_passes, mcor_gate, ClusterFeature, ClusterMetrics,
-    FeatureMetrics, McorCluster, McorMatch, McorMetrics, McorOutcome, McorSelection, McorVerdict,
-    SightingsJudgement, MCOR_CLUSTER_CAPACITY,
+    Exceeded, FeatureMetrics, McorCluster, McorMatch, McorMetrics, McorOutcome, McorSelection,
+    McorVerdict, SightingsJudgement, MCOR_CLUSTER_CAPACITY,
 };
 pub use mcor_views::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
 pub use params::{
