@@ -63,6 +63,23 @@ fn the_results_report_agrees_with_the_committed_tables() {
     noisefree_ok(&["report", "--check", "README.md"]);
 }
 
+/// Every committed table is what `noisefree table` makes of its runs today, byte for byte
+/// (tools/regenerate_check.sh: each folder copied and its tables made again).
+#[test]
+fn every_committed_table_regenerates_byte_for_byte() {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tools/regenerate_check.sh");
+    let out = std::process::Command::new("bash")
+        .args([script, env!("CARGO_BIN_EXE_noisefree")])
+        .output()
+        .expect("bash runs");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[test]
 fn report_write_creates_a_new_file_with_its_findings() {
     let dir = common::tmpdir("report-new");

@@ -304,6 +304,22 @@ fn a_missing_ground_truth_is_named_as_such_and_the_ate_has_three_digits() {
         text.contains("ATE RMSE n/a (the sequence has no ground truth)"),
         "{text}"
     );
+    // A sweep of it tracks, is not a failure, and its table says n/a, not F.
+    let swept = out.join("sweep");
+    noisefree_ok(&[
+        "sweep",
+        "--path",
+        seq.to_str().unwrap(),
+        "--configs",
+        "orb",
+        "--quiet",
+        "--out",
+        swept.to_str().unwrap(),
+    ]);
+    noisefree_ok(&["table", swept.to_str().unwrap()]);
+    let t3 = std::fs::read_to_string(swept.join("table3.md")).unwrap();
+    assert!(t3.contains("| n/a |"), "{t3}");
+    assert!(t3.contains("'n/a': the runs tracked"), "{t3}");
     for d in [seq, out] {
         let _ = std::fs::remove_dir_all(d);
     }

@@ -549,7 +549,7 @@ fn a_sweep_whose_runs_are_one_run_says_so_and_how_to_make_them_vary() {
             "--seq",
             "kinect",
             "--configs",
-            "orb",
+            "orb,mcor",
             "--runs",
             "2",
             "--frames",
@@ -565,12 +565,20 @@ fn a_sweep_whose_runs_are_one_run_says_so_and_how_to_make_them_vary() {
     let o = run(&sync, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("in 1 of the 1 cells with several runs every run gave the same result"),
+        err.contains("in 2 of the 2 cells with several runs every run gave the same result"),
         "{err}"
     );
     assert!(err.contains("--mapping-lag 3"), "{err}");
     noisefree_ok(&["table", sync.to_str().unwrap()]);
     let t3 = std::fs::read_to_string(sync.join("table3.md")).unwrap();
-    assert!(t3.contains("In 1 of the 1 cells with several runs"), "{t3}");
+    assert!(t3.contains("In 2 of the 2 cells with several runs"), "{t3}");
+    // The findings say why nothing was compared, not "0 reproduce a gain".
+    let report = noisefree_ok(&["report", sync.to_str().unwrap()]);
+    let md = String::from_utf8_lossy(&report.stdout);
+    assert!(
+        md.contains("Nothing could be compared: in 1 cell every run"),
+        "{md}"
+    );
+    assert!(md.contains("unperturbed, no comparison"), "{md}");
     let _ = std::fs::remove_dir_all(sync);
 }

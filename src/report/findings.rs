@@ -324,6 +324,11 @@ pub struct Tally {
 impl Tally {
     /// The tally as a clause: "12 comparisons of 9 paper cells (...): 0 reproduce a gain, ...".
     fn sentence(&self) -> String {
+        if self.n == 0 {
+            return "no comparison (no twin of a Table III row at the paper's parameters among \
+                    the tables read)"
+                .into();
+        }
         let repeats = self.n.saturating_sub(self.cells);
         let of = if repeats == 0 {
             format!(
@@ -376,7 +381,7 @@ fn axis_findings(
     }
     let _ = writeln!(md, "### {title}\n\n{claim}\n");
     if by_folder.is_empty() {
-        let _ = writeln!(md, "No committed table has a `{family}` axis.\n");
+        let _ = writeln!(md, "None of the tables read has a `{family}` axis.\n");
         return (0, 0);
     }
     md.push_str(
@@ -561,7 +566,7 @@ fn table1_findings(md: &mut String, rows: &[VersusRow], base: &Path) {
     }
     groups.retain(|_, v| v.len() >= 2);
     if groups.is_empty() {
-        md.push_str("No committed table varies b with the baseline beside it.\n\n");
+        md.push_str("None of the tables read varies b with the baseline beside it.\n\n");
         return;
     }
     md.push_str(
@@ -638,7 +643,9 @@ fn variance_findings(md: &mut String, rows: &[VersusRow], base: &Path) {
         }
     }
     if pairs.is_empty() {
-        md.push_str("No committed cell has MC-OR and the baseline with spread to compare.\n\n");
+        md.push_str(
+            "No cell of the tables read has MC-OR and the baseline with spread to compare.\n\n",
+        );
         return;
     }
     let adj = holm(&pairs.iter().map(|p| p.1 .3).collect::<Vec<_>>());
@@ -731,7 +738,9 @@ fn table2_findings(md: &mut String, dirs: &[PathBuf], base: &Path) -> Result<()>
         }
     }
     if !any {
-        md.push_str("No committed Table II.\n");
+        md.push_str(
+            "None of the tables read is a Table II (`noisefree analyze correlation` makes one).\n",
+        );
     }
     md.push('\n');
     Ok(())
@@ -954,6 +963,20 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
         counted(comparisons, "comparison", "comparisons"),
         counted(folders, "table", "tables"),
     );
+    let identical = rows
+        .iter()
+        .filter(|r| r.config != "orb" && r.diff_pct.is_none() && r.runs > 1)
+        .filter(|r| r.std == Some(0.0))
+        .count();
+    if comparisons == 0 && identical > 0 {
+        md.push_str(&format!(
+            "Nothing could be compared: in {} every run gave the same result (a synchronous run \
+             is deterministic; its seed only reaches relocalization's RANSAC), so n runs are one \
+             and no test exists. Sweep with `--mapping-lag 3` (ORB-SLAM2's thread timing, its \
+             run-to-run spread) or `--vary-sequence` (a new synthetic realization per run).\n\n",
+            counted(identical, "cell", "cells")
+        ));
+    }
     if !left_out.is_empty() {
         let named: Vec<String> = left_out
             .iter()

@@ -32,6 +32,8 @@ pub struct Cell {
     pub failed: usize,
     /// Mean frames per second.
     pub fps: f64,
+    /// Runs that did not fail and have no ATE: their sequence has no ground truth.
+    pub unscored: usize,
 }
 
 /// Mean and population standard deviation of `values` (summed in their order), `None` when
@@ -62,13 +64,24 @@ impl Cell {
             None => (None, None),
         };
         let fps = runs.iter().map(|r| r.fps).sum::<f64>() / runs.len().max(1) as f64;
+        let unscored = runs
+            .iter()
+            .filter(|r| !r.failed && r.ate_rmse.is_none())
+            .count();
         Cell {
             mean,
             std,
             runs: runs.len(),
             failed,
             fps,
+            unscored,
         }
+    }
+
+    /// Whether the cell reads 'n/a': its runs tracked, and nothing scores them (no ground
+    /// truth), which is not a failure.
+    pub fn is_unscored(&self) -> bool {
+        self.mean.is_none() && self.unscored > 0 && 2 * self.failed <= self.runs
     }
 
     /// Whether the cell reads 'F'.
@@ -79,6 +92,9 @@ impl Cell {
     /// Mean ± std in millimetres with `decimals` decimals, `12.34 ± 0.56` (with `(kF)` when
     /// some runs failed), or `F`.
     pub fn text(&self, decimals: usize) -> String {
+        if self.is_unscored() {
+            return "n/a".into();
+        }
         if self.is_failure() {
             return "F".into();
         }
@@ -566,7 +582,7 @@ fn table3_protocol_notes(
          (tau_MF, tau_GF, tau_MG) = {:?} m, AVC baseline {} m. Association: evaluate_ate.py's (|dt| < 0.02 s, \
          greedy, each stamp once), SE3 Umeyama alignment; EuRoC estimates converted to the body frame. \
          'F': more than half the runs failed (fewer than 80 % of the frames tracked, or no ATE); `(kF)`: k \
-         failed runs left out of the mean. {}{}{}{}",
+         failed runs left out of the mean. {}{}{}{}{}",
         seeds.saturating_sub(1),
         DEFAULT_TAUS,
         DEFAULT_BASELINE,
@@ -579,6 +595,12 @@ fn table3_protocol_notes(
                  each keyframe is mapped 0..={n} frames late, drawn from the run's seed, so runs of \
                  one sequence spread as ORB-SLAM2's threads make them spread."
             ),
+        },
+        if records.iter().any(|r| !r.failed && r.ate_rmse.is_none()) {
+            " 'n/a': the runs tracked, and their sequence has no ground truth to score them \
+             (not a failure)."
+        } else {
+            ""
         },
         match crate::sweep::spread::identical_cells(&shown_in_table3(records)) {
             (several, identical) if !identical.is_empty() => format!(

@@ -22,15 +22,20 @@ fn cell(r: &RunRecord) -> String {
     key
 }
 
-/// The cells of `records` with more than one run, and of those the cells whose runs all gave
-/// the same ATE bit for bit (or all failed alike), in cell order.
+/// The cells of `records` with more than one run and at least one ATE, and of those the cells
+/// whose runs all gave the same ATE bit for bit, in cell order (a cell whose runs all failed
+/// has no spread to speak of).
 pub fn identical_cells(records: &[RunRecord]) -> (usize, Vec<String>) {
     let mut cells: BTreeMap<String, Vec<&RunRecord>> = BTreeMap::new();
     for r in records {
         cells.entry(cell(r)).or_default().push(r);
     }
-    let several: Vec<(&String, &Vec<&RunRecord>)> =
-        cells.iter().filter(|(_, runs)| runs.len() > 1).collect();
+    // Cells without any ATE (every run failed, or nothing to score) have no spread to speak of.
+    let several: Vec<(&String, &Vec<&RunRecord>)> = cells
+        .iter()
+        .filter(|(_, runs)| runs.len() > 1)
+        .filter(|(_, runs)| runs.iter().any(|r| r.ate_rmse.is_some()))
+        .collect();
     let identical = several
         .iter()
         .filter(|(_, runs)| {
@@ -126,6 +131,17 @@ mod tests {
         let note = identical_note(&records).unwrap();
         assert!(note.contains("in 1 of the 2 cells") && note.contains("--mapping-lag 3"));
         assert!(identical_note(&records[2..]).is_none());
+        // A cell whose runs all failed is not "identical": it has no ATE to agree on.
+        let failed = |seed: u64| RunRecord {
+            failed: true,
+            ate_rmse: None,
+            ..RunRecord::example("kinect", "bad", seed, 0.0)
+        };
+        let with_failures = [records.to_vec(), vec![failed(0), failed(1)]].concat();
+        assert_eq!(
+            identical_cells(&with_failures),
+            (2, vec!["kinect orb".into()])
+        );
     }
 
     #[test]
