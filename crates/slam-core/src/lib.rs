@@ -8,9 +8,14 @@
 //! - [`frame`]: a tracked frame (keypoints, descriptors, depth / stereo, cell grid);
 //! - [`geometry`]: SE3 / SO3 maps and the perturbation convention;
 //! - [`optimize`]: residuals, pose-only optimization, local bundle adjustment;
-//! - [`data`]: the map (keyframes, map points, covisibility) in arenas with typed ids;
+//! - [`data`]: the map (keyframes, map points and their frame views, covisibility) in arenas
+//!   with typed ids;
 //! - [`matching`]: projection, stereo and fuse searches;
-//! - [`module`]: tracking, local mapping, relocalization;
+//! - [`module`]: tracking, local mapping, relocalization, loop closing;
+//! - [`techniques`]: the paper's contribution, each technique in one place: MC-OR
+//!   ([`techniques::mcor`]: clusters, metrics, gate, fast path, the frame's cache and its hook
+//!   into pose optimization), AVC ([`techniques::avc`]), their parameters and readings
+//!   ([`techniques::params`]), and noisefree's rigid consensus beyond the paper;
 //! - [`place`]: place recognition (vocabulary, BoW vectors, keyframe database, training);
 //! - [`solve`]: triangulation, absolute orientation, pose RANSAC;
 //! - [`system`]: the synchronous `System` tying them together; [`ranges`]: the valid range of

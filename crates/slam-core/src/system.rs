@@ -27,14 +27,13 @@ use crate::module::keyframe_decision::{need_new_keyframe, KeyFrameDecisionInput,
 use crate::module::keyframe_insertion::create_keyframe;
 use crate::module::local_mapping::{LocalMapper, MappingContext, MappingParams, MappingReport};
 use crate::module::loop_closing::{LoopCloser, LoopClosingParams, LoopContext, LoopEvent};
-use crate::module::mcor_clusters::ClusterCache;
-use crate::module::pose_estimation::{mcor_frame_gate_with, renormalized, NoiseHooks};
+use crate::module::pose_estimation::{renormalized, NoiseHooks};
 use crate::module::relocalization::{relocalize, RelocalizationContext, RelocalizationParams};
 use crate::module::tracking::{Tracker, TrackingContext, TrackingParams};
 use crate::optimize::{BaConfig, PoseOptConfig};
 use crate::place::{PlaceRecognition, Vocabulary};
+use crate::techniques::mcor::{frame_sightings, mcor_frame_gate_with, ClusterCache};
 
-use crate::module::pose_estimation::frame_sightings;
 pub use crate::techniques::params::{
     AvcGate, AvcParams, BaselineRole, ClusterViews, McorParams, Scope, Sightings, Verdict,
 };

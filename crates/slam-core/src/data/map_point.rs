@@ -6,9 +6,9 @@ use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
 
+use super::frame_views::FrameViews;
 use super::{KeyFrameId, MapPointId, ScaleLevels};
 use crate::feature::Descriptor;
-use crate::techniques::FrameViews;
 
 /// A 3-D landmark. Observations map each observing keyframe to the keypoint index in it.
 #[derive(Clone, Debug)]
@@ -50,7 +50,7 @@ pub struct MapPoint {
     /// Local-mapping marker: id + 1 of the keyframe whose local BA last included this point.
     pub ba_local_for_kf: u32,
     /// MC-OR's frame views of the point (only stored under
-    /// [`crate::techniques::params::ClusterViews::EveryFrame`]; empty otherwise).
+    /// `ClusterViews::EveryFrame`; empty otherwise).
     pub views: FrameViews,
 }
 

@@ -4,6 +4,7 @@
 //! iterated in id order, so the same input gives the same map.
 
 mod features;
+mod frame_views;
 mod graph;
 mod keyframe;
 mod levels;
@@ -13,6 +14,7 @@ mod tracked_frame;
 
 pub use crate::ids::{KeyFrameId, MapPointId};
 pub use features::{undistorted_bounds, FeatureGrid, Features, GRID_COLS, GRID_ROWS};
+pub use frame_views::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT, MCOR_CLUSTER_CAPACITY};
 pub use graph::COVISIBILITY_MIN_WEIGHT;
 pub use keyframe::KeyFrame;
 pub use levels::ScaleLevels;

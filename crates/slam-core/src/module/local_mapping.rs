@@ -9,7 +9,7 @@ use std::time::Instant;
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::pose_estimation::{map_point_cluster, measurement_for, renormalized, NoiseHooks};
+use super::pose_estimation::{measurement_for, renormalized, NoiseHooks};
 use crate::camera::Camera;
 use crate::data::{KeyFrameId, Map, MapPointId, ScaleLevels};
 use crate::matching::epipolar::{fundamental_12, search_for_triangulation};
@@ -18,6 +18,7 @@ use crate::optimize::{
     local_bundle_adjustment, BaConfig, BaKeyFrame, BaObservation, BaPoint, BaProblem,
 };
 use crate::solve::triangulate_linear;
+use crate::techniques::mcor::map_point_cluster;
 use crate::techniques::{
     FrameView, McorParams, Scope, Sightings, SightingsJudgement, FRAME_VIEW_SOURCE_BIT,
 };

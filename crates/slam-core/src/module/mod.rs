@@ -2,9 +2,9 @@
 //! optimization of a frame, with the MC-OR / AVC hook points), [`tracking`] (motion model,
 //! reference keyframe, local map), [`keyframe_decision`] and [`keyframe_insertion`] (when and how a
 //! frame becomes a keyframe), [`local_mapping`] (new points, fusion, culling, local BA) and
-//! [`relocalization`], [`loop_closing`] with its [`essential_graph`] and [`global_ba`]. [`mcor_clusters`]
-//! keeps MC-OR's clusters of a frame's matches for all of the frame's gates; [`crate::techniques::params`]
-//! holds the parameters of the paper's two techniques.
+//! [`relocalization`], [`loop_closing`] with its [`essential_graph`] and [`global_ba`]. The paper's
+//! techniques and their parameters are in [`crate::techniques`] (MC-OR's cluster cache and gate in
+//! [`crate::techniques::mcor`]).
 
 pub mod essential_graph;
 pub mod global_ba;
@@ -12,7 +12,6 @@ pub mod keyframe_decision;
 pub mod keyframe_insertion;
 pub mod local_mapping;
 pub mod loop_closing;
-pub mod mcor_clusters;
 pub mod pose_estimation;
 pub mod relocalization;
 #[cfg(test)]

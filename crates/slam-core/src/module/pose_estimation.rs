@@ -5,14 +5,14 @@
 //!    stereo / RGB-D with `ur = u - bf / depth`); with AVC on, a keypoint with measured depth gets
 //!    the 4-D [`VirtualCameraResidual`] instead (also in local BA, which calls this too);
 //! 2. the `between_rounds` gate of [`optimize_frame_pose`], run before every optimization round
-//!    with the current pose: MC-OR ([`mcor_frame_gate`]) excludes observations there, and AVC
+//!    with the current pose: MC-OR ([`RoundGate`], in [`crate::techniques::mcor`]) excludes observations there, and AVC
 //!    re-aims every virtual camera from the current pose.
 //!
 //! MC-OR clusters are not stored: a map point's cluster is derived from its keyframe
 //! observations when a frame is gated — each observing keyframe's keypoint back-projected with
 //! its measured depth and placed with that keyframe's *current* pose (so clusters follow local
 //! BA's corrections for free, and memory is what the map already holds; the transient
-//! [`McorCluster`] caps itself at [`crate::techniques::MCOR_CLUSTER_CAPACITY`] features, folding
+//! [`McorCluster`](crate::techniques::mcor::McorCluster) caps itself at [`crate::techniques::MCOR_CLUSTER_CAPACITY`] features, folding
 //! older ones into the centroid's running sum). Keyframe poses do not change during a pose
 //! optimization, so the clusters are built once per call and only the current frame's feature
 //! moves between rounds. By default MC-OR gates pose-only optimization only (the paper: it acts
@@ -26,23 +26,17 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use super::mcor_clusters::ClusterCache;
 use crate::camera::Camera;
-use crate::data::MapPointId;
-use crate::data::{Features, Map, ScaleLevels, TrackedFrame};
+use crate::data::{Features, Map, MapPointId, ScaleLevels, TrackedFrame};
 use crate::optimize::{
     pose_optimization_with, Admission, Measurement, PoseObservation, PoseOptConfig,
 };
-use crate::techniques::mcor_prepared::gate_point;
-use crate::techniques::mcor_prepared::GateMemo;
-use crate::techniques::params::{AvcParams, ClusterViews, McorParams, Sightings, Verdict};
+use crate::techniques::mcor::{ClusterCache, Exceeded, McorVerdict, RoundGate, TappedVerdicts};
+use crate::techniques::params::{AvcParams, McorParams};
 use crate::techniques::rigid_consensus::{
     nested, rigid_consensus, ConsensusMatch, RigidConsensusParams,
 };
-use crate::techniques::{
-    ClusterFeature, Exceeded, FrameView, McorCluster, McorOutcome, McorVerdict, VirtualCameraRef,
-    VirtualCameraResidual,
-};
+use crate::techniques::{VirtualCameraRef, VirtualCameraResidual};
 
 /// `t` with its rotation quaternion renormalised. Products of unit quaternions drift off unit
 /// norm by rounding, and the constant-velocity model (`V = T_c T_l^-1`, then `V T_c`) multiplies
@@ -134,160 +128,6 @@ fn avc_depth(features: &Features, i: usize, hooks: &NoiseHooks) -> Option<f64> {
     features
         .depth_of(i)
         .filter(|&depth| VirtualCameraResidual::is_defined(depth, avc.baseline))
-}
-
-/// The MC-OR cluster of map point `mp`: every observing (good) keyframe's keypoint with a
-/// measured depth, back-projected and placed with the keyframe's current pose, in keyframe-id
-/// order (so the ring keeps the most recent keyframes); under
-/// [`ClusterViews::EveryFrame`] followed by the point's stored frame views (oldest first, each
-/// placed through its reference keyframe's current pose), so the ring keeps the most recent
-/// views.
-pub fn map_point_cluster(
-    map: &Map,
-    mp: crate::data::MapPointId,
-    camera: &Camera,
-    views: ClusterViews,
-) -> McorCluster {
-    let mut cluster = McorCluster::new();
-    let Some(m) = map.map_point(mp) else {
-        return cluster;
-    };
-    for (&kf, &idx) in &m.observations {
-        let Some(k) = map.keyframe(kf) else {
-            continue;
-        };
-        let Some(pc) = k.features.unproject_camera(idx, camera) else {
-            continue;
-        };
-        if let Some(f) = ClusterFeature::new(kf.0 as u64, pc, &k.tcw.inverse()) {
-            cluster.push(f);
-        }
-    }
-    if views == ClusterViews::EveryFrame {
-        m.views
-            .extend_cluster(&mut cluster, |kf| map.keyframe_pose_any(kf));
-    }
-    cluster
-}
-
-/// Algorithm 1 over the matches of `frame` at pose `tcw` (world -> camera), as the gate of
-/// [`optimize_frame_pose`] runs it; returns the matched keypoint indices (ascending) and the
-/// outcome per match. For analyses (paper Fig. 7, 8) and the per-frame statistics.
-pub fn mcor_frame_gate(
-    frame: &TrackedFrame,
-    map: &Map,
-    camera: &Camera,
-    params: &McorParams,
-    tcw: &Isometry3<f64>,
-) -> (Vec<usize>, McorOutcome) {
-    mcor_frame_gate_with(frame, map, camera, params, tcw, &mut ClusterCache::new())
-}
-
-/// [`mcor_frame_gate`] with the clusters kept in `clusters` (built there on first use, reused
-/// while the map does not change; its owner invalidates it when the map does).
-pub fn mcor_frame_gate_with(
-    frame: &TrackedFrame,
-    map: &Map,
-    camera: &Camera,
-    params: &McorParams,
-    tcw: &Isometry3<f64>,
-    clusters: &mut ClusterCache,
-) -> (Vec<usize>, McorOutcome) {
-    let twc = tcw.inverse();
-    let mut index = Vec::new();
-    let mut outcome = McorOutcome {
-        verdicts: Vec::new(),
-        n_rejected_clusters: 0,
-        n_rejected_features: 0,
-    };
-    let mut matched = Vec::new();
-    for i in 0..frame.len() {
-        let Some(id) = frame.map_points[i] else {
-            continue;
-        };
-        if clusters.prepare(map, id, camera, params.cluster_views) {
-            matched.push((i, id));
-        }
-    }
-    // The frame's pose optimizations gated these matches at nearby poses.
-    let mut memo = clusters.take_memo(frame.id, frame.len(), params);
-    memo.moves(&twc);
-    for (i, id) in matched {
-        index.push(i);
-        let point_camera = gate_point(frame.features.unproject_camera(i, camera));
-        let p_norm = point_camera.map_or(0.0, |p| p.norm());
-        outcome.push(memo.verdict((i, id), p_norm, || {
-            clusters
-                .cluster(id)
-                .verdict_with_reach(params, &twc, point_camera.as_ref())
-        }));
-    }
-    clusters.put_memo(memo);
-    (index, outcome)
-}
-
-/// What MC-OR's verdict on a match does in pose-only optimization: a rejected match is
-/// excluded; a kept one is left to the chi2 test (`verdict = "filter"`), or, under `verdict =
-/// "consensus"`, kept whatever its chi2 when its cluster holds at least
-/// `consensus_min_sightings` sightings and the keypoint has depth (`with_depth`) for the
-/// cluster to agree with.
-fn admission(
-    params: &McorParams,
-    verdict: McorVerdict,
-    cluster: &crate::techniques::mcor_prepared::PreparedCluster,
-    with_depth: bool,
-) -> Admission {
-    match verdict {
-        McorVerdict::RejectedCluster | McorVerdict::RejectedFeature => Admission::Excluded,
-        McorVerdict::Kept
-            if params.verdict == Verdict::Consensus
-                && with_depth
-                && cluster.sightings() >= u64::from(params.consensus_min_sightings) =>
-        {
-            Admission::Kept
-        }
-        McorVerdict::Kept => Admission::Free,
-    }
-}
-
-/// The views tracked frame `frame` adds to its map points' clusters, in keypoint order: one
-/// per matched keypoint with depth that ended the frame as an inlier, or, under `sightings =
-/// "all"`, per matched keypoint with depth, chi2 and MC-OR outliers included. Nothing unless
-/// `params` keeps the frame's views ([`McorParams::keeps_views_of`]) and the frame has a pose
-/// and a reference keyframe. Not for a frame made a keyframe: its matches are keyframe
-/// observations already.
-pub fn frame_sightings(
-    frame: &TrackedFrame,
-    map: &Map,
-    camera: &Camera,
-    params: &McorParams,
-) -> Vec<(MapPointId, FrameView)> {
-    if !params.keeps_views_of(frame.id) {
-        return Vec::new();
-    }
-    let (Some(tcw), Some(reference)) = (frame.tcw, frame.reference_kf) else {
-        return Vec::new();
-    };
-    let Some(tkw) = map.keyframe_pose_any(reference) else {
-        return Vec::new();
-    };
-    let twc = tcw.inverse();
-    let mut views = Vec::new();
-    for i in 0..frame.len() {
-        let Some(id) = frame.map_points[i] else {
-            continue;
-        };
-        if frame.outliers[i] && params.sightings == Sightings::Inliers {
-            continue;
-        }
-        let Some(pc) = frame.features.unproject_camera(i, camera) else {
-            continue;
-        };
-        if let Some(view) = FrameView::placed(frame.id, &twc, reference, &tkw, pc) {
-            views.push((id, view));
-        }
-    }
-    views
 }
 
 /// The exact bits of a pose (translation, then quaternion), to tell whether two poses are
@@ -479,20 +319,30 @@ fn tap_push(record: PoseOptRecord) {
     });
 }
 
-/// Optimizes `frame.tcw` (must be set) against its matched map points and sets
-/// `frame.outliers`. Returns the match / inlier counts. With fewer than 3 matches the pose is
-/// left unchanged (ORB-SLAM2 returns 0 inliers then).
-pub fn optimize_frame_pose(
+/// What [`frame_observations`] builds.
+struct FrameObservations {
+    /// One per match, in keypoint order.
+    obs: Vec<PoseObservation>,
+    /// Each observation's keypoint.
+    index: Vec<usize>,
+    /// The AVC residuals, built together.
+    avc: Arc<[VirtualCameraResidual]>,
+    /// Per AVC residual: its observation and the keypoint's depth.
+    avc_at: Vec<(usize, f64)>,
+}
+
+/// The observations of `frame`'s matches for pose optimization, in keypoint order, with their
+/// keypoint indices (each match's outlier flag cleared). Under AVC, a keypoint with depth gets a
+/// virtual-camera residual aimed from `initial`; those residuals are built into one set (one
+/// allocation), returned with where each sits (`(observation, depth)`).
+fn frame_observations(
     frame: &mut TrackedFrame,
     map: &Map,
     camera: &Camera,
     levels: &ScaleLevels,
-    cfg: &PoseOptConfig,
     hooks: &NoiseHooks,
-) -> PoseOptCounts {
-    let Some(initial) = frame.tcw else {
-        return PoseOptCounts::default();
-    };
+    initial: &Isometry3<f64>,
+) -> FrameObservations {
     let mut obs = Vec::with_capacity(frame.len());
     let mut index = Vec::with_capacity(frame.len());
     // The observations that get an AVC residual, with their keypoint's depth: their residuals
@@ -523,7 +373,7 @@ pub fn optimize_frame_pose(
             .iter()
             .map(|&(k, depth)| {
                 let kp = &frame.features.keypoints[index[k]];
-                let estimate = (initial * Point3::from(obs[k].point_world)).coords;
+                let estimate = (*initial * Point3::from(obs[k].point_world)).coords;
                 VirtualCameraResidual::with_aim_from(
                     camera,
                     kp.x as f64,
@@ -543,6 +393,109 @@ pub fn optimize_frame_pose(
         let r = VirtualCameraRef::new(&avc, n).expect("one residual per AVC observation");
         obs[k].measurement = Measurement::VirtualCamera(r);
     }
+    FrameObservations {
+        obs,
+        index,
+        avc,
+        avc_at,
+    }
+}
+
+/// The matches as rigid consensus reads them: map point, back-projection, the baseline's
+/// measurement (aimed from `initial`) and how established the point is.
+fn consensus_matches(
+    frame: &TrackedFrame,
+    map: &Map,
+    camera: &Camera,
+    index: &[usize],
+    obs: &[PoseObservation],
+    initial: &Isometry3<f64>,
+) -> Vec<ConsensusMatch> {
+    index
+        .iter()
+        .zip(obs)
+        .map(|(&i, o)| {
+            let m = map.map_point(frame.map_points[i].expect("matched"));
+            let estimate = (*initial * Point3::from(o.point_world)).coords;
+            ConsensusMatch {
+                map_point: o.point_world,
+                point_camera: frame.features.unproject_camera(i, camera),
+                measurement: measurement_for(
+                    camera,
+                    &frame.features,
+                    i,
+                    &NoiseHooks::default(),
+                    &estimate,
+                ),
+                inv_sigma2: o.inv_sigma2,
+                keyframes: m.map_or(0, |m| m.observations.len() as u32),
+                frames_found: m.map_or(0, |m| m.n_found),
+            }
+        })
+        .collect()
+}
+
+/// Rigid consensus's veto of one round: matches outside the consensus (`outside`) excluded while
+/// `active` (its first rounds), every match free after.
+fn apply_veto(excluded: &mut [Admission], outside: &[bool], active: bool) {
+    if active {
+        for (a, &o) in excluded.iter_mut().zip(outside) {
+            *a = if o {
+                Admission::Excluded
+            } else {
+                Admission::Free
+            };
+        }
+    } else {
+        excluded.fill(Admission::Free);
+    }
+}
+
+/// What the tap records of each match: keypoint, map point, inlier at the final pose and MC-OR's
+/// last verdict with the thresholds a rejection exceeded.
+fn record_matches(
+    frame: &TrackedFrame,
+    index: &[usize],
+    obs: &[PoseObservation],
+    inliers: &[bool],
+    last_verdicts: Option<TappedVerdicts>,
+) -> Vec<PoseOptMatch> {
+    index
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| PoseOptMatch {
+            keypoint: i,
+            map_point: frame.map_points[i].expect("matched"),
+            point_world: obs[k].point_world,
+            inlier: inliers[k],
+            mcor: last_verdicts.as_ref().map(|v| v[k].0),
+            mcor_exceeded: last_verdicts
+                .as_ref()
+                .map_or_else(Exceeded::default, |v| v[k].1),
+        })
+        .collect()
+}
+
+/// Optimizes `frame.tcw` (must be set) against its matched map points and sets
+/// `frame.outliers`. Returns the match / inlier counts. With fewer than 3 matches the pose is
+/// left unchanged (ORB-SLAM2 returns 0 inliers then).
+pub fn optimize_frame_pose(
+    frame: &mut TrackedFrame,
+    map: &Map,
+    camera: &Camera,
+    levels: &ScaleLevels,
+    cfg: &PoseOptConfig,
+    hooks: &NoiseHooks,
+) -> PoseOptCounts {
+    let Some(initial) = frame.tcw else {
+        return PoseOptCounts::default();
+    };
+    let FrameObservations {
+        obs,
+        index,
+        avc,
+        avc_at,
+    } = frame_observations(frame, map, camera, levels, hooks, &initial);
     if obs.len() < 3 {
         return PoseOptCounts {
             n_matches: obs.len(),
@@ -555,28 +508,7 @@ pub fn optimize_frame_pose(
     // matches outside the consensus kept out of its first rounds.
     let rc_matches: Option<Vec<ConsensusMatch>> = hooks.rc.map(|_| {
         frame.dynamic.clear();
-        index
-            .iter()
-            .zip(&obs)
-            .map(|(&i, o)| {
-                let m = map.map_point(frame.map_points[i].expect("matched"));
-                let estimate = (initial * Point3::from(o.point_world)).coords;
-                ConsensusMatch {
-                    map_point: o.point_world,
-                    point_camera: frame.features.unproject_camera(i, camera),
-                    measurement: measurement_for(
-                        camera,
-                        &frame.features,
-                        i,
-                        &NoiseHooks::default(),
-                        &estimate,
-                    ),
-                    inv_sigma2: o.inv_sigma2,
-                    keyframes: m.map_or(0, |m| m.observations.len() as u32),
-                    frames_found: m.map_or(0, |m| m.n_found),
-                }
-            })
-            .collect()
+        consensus_matches(frame, map, camera, &index, &obs, &initial)
     });
     // MC-OR clusters (the map is fixed during this call; the frame's own cache when the system
     // keeps one, shared with the frame's other gates) and the current features.
@@ -586,33 +518,12 @@ pub fn optimize_frame_pose(
         Some(c) => c,
         None => own_clusters.get_or_insert_with(ClusterCache::new),
     };
-    let cluster_of: Vec<MapPointId> = match hooks.mcor {
-        Some(params) => index
-            .iter()
-            .map(|&i| {
-                let mp = frame.map_points[i].expect("matched");
-                let prepared = clusters.prepare(map, mp, camera, params.cluster_views);
-                assert!(prepared, "a matched map point is in the map");
-                mp
-            })
-            .collect(),
-        None => Vec::new(),
-    };
-    // MC-OR's verdicts kept across the rounds and the gates of this frame.
-    let memo = std::cell::RefCell::new(match hooks.mcor {
-        Some(params) => clusters.take_memo(frame.id, frame.len(), params),
-        None => GateMemo::default(),
-    });
+    // MC-OR's gate of this call: the matches' clusters, prepared once, and its verdicts kept
+    // across the rounds and the gates of this frame.
+    let mcor = hooks
+        .mcor
+        .map(|params| RoundGate::prepare(clusters, map, camera, frame, &index, params));
     let shared: &ClusterCache = clusters;
-    let gated: Vec<Option<Vector3<f64>>> = match hooks.mcor {
-        Some(_) => index
-            .iter()
-            .map(|&i| gate_point(frame.features.unproject_camera(i, camera)))
-            .collect(),
-        None => Vec::new(),
-    };
-    // |p| of each current feature (camera frame): how far a pose change can move it.
-    let gated_norm: Vec<f64> = gated.iter().map(|p| p.map_or(0.0, |p| p.norm())).collect();
     let tapped = tap_active();
     let rc_veto_rounds = hooks.rc.map_or(0, |p| p.veto_rounds);
     // One pose optimization from `start`; `veto` (one per match) keeps matches out of the
@@ -625,7 +536,7 @@ pub fn optimize_frame_pose(
     let aimed_from = std::cell::Cell::new(Some(pose_bits(&initial)));
     let optimize = |start: &Isometry3<f64>, veto: Option<&[bool]>| {
         let mut last_gate = (0, 0);
-        let mut last_verdicts: Option<Vec<(McorVerdict, Exceeded)>> = None;
+        let mut last_verdicts: Option<TappedVerdicts> = None;
         // Hook point 2, before every round with the latest pose: re-aim the virtual cameras,
         // then re-run MC-OR (an observation rejected at a poor early pose may come back).
         let mut gate = |round: usize, pose: &Isometry3<f64>, excluded: &mut [Admission]| {
@@ -636,52 +547,12 @@ pub fn optimize_frame_pose(
                 aimed_from.set(Some(pose_bits(pose)));
             }
             if let Some(out) = veto {
-                if round < rc_veto_rounds {
-                    for (a, &o) in excluded.iter_mut().zip(out) {
-                        *a = if o {
-                            Admission::Excluded
-                        } else {
-                            Admission::Free
-                        };
-                    }
-                } else {
-                    excluded.fill(Admission::Free);
-                }
+                apply_veto(excluded, out, round < rc_veto_rounds);
             }
-            if let Some(params) = hooks.mcor {
-                let twc = pose.inverse();
-                let mut memo = memo.borrow_mut();
-                memo.moves(&twc);
-                let mut verdicts = Vec::new();
-                last_gate = (0, 0);
-                let matches = index.iter().zip(&cluster_of).zip(&gated).zip(&gated_norm);
-                for (e, (((&i, &id), p), &p_norm)) in excluded.iter_mut().zip(matches) {
-                    let verdict = memo.verdict((i, id), p_norm, || {
-                        shared
-                            .cluster(id)
-                            .verdict_with_reach(params, &twc, p.as_ref())
-                    });
-                    match verdict {
-                        McorVerdict::RejectedCluster => last_gate.0 += 1,
-                        McorVerdict::RejectedFeature => last_gate.1 += 1,
-                        McorVerdict::Kept => {}
-                    }
-                    *e = admission(params, verdict, shared.cluster(id), p.is_some());
-                    if tapped {
-                        // Which thresholds failed: the fast verdict stops at the first.
-                        let exceeded = match verdict {
-                            McorVerdict::Kept => Exceeded::default(),
-                            _ => {
-                                let metrics = shared.cluster(id).metrics(params, &twc, p.as_ref());
-                                Exceeded::of(params, &metrics, verdict)
-                            }
-                        };
-                        verdicts.push((verdict, exceeded));
-                    }
-                }
-                if tapped {
-                    last_verdicts = Some(verdicts);
-                }
+            if let Some(mcor) = &mcor {
+                let (counts, verdicts) = mcor.gate(shared, &pose.inverse(), excluded, tapped);
+                last_gate = counts;
+                last_verdicts = verdicts;
             }
         };
         let result = pose_optimization_with(camera, start, &obs, cfg, &mut gate);
@@ -720,8 +591,8 @@ pub fn optimize_frame_pose(
             solved
         }
     };
-    if hooks.mcor.is_some() {
-        clusters.put_memo(memo.into_inner());
+    if let Some(mcor) = mcor {
+        mcor.finish(clusters);
     }
     frame.tcw = Some(renormalized(&result.pose));
     for (k, &i) in index.iter().enumerate() {
@@ -731,20 +602,7 @@ pub fn optimize_frame_pose(
         tap_push(PoseOptRecord {
             frame_id: frame.id,
             tcw: frame.tcw.expect("just set"),
-            matches: index
-                .iter()
-                .enumerate()
-                .map(|(k, &i)| PoseOptMatch {
-                    keypoint: i,
-                    map_point: frame.map_points[i].expect("matched"),
-                    point_world: obs[k].point_world,
-                    inlier: result.inliers[k],
-                    mcor: last_verdicts.as_ref().map(|v| v[k].0),
-                    mcor_exceeded: last_verdicts
-                        .as_ref()
-                        .map_or_else(Exceeded::default, |v| v[k].1),
-                })
-                .collect(),
+            matches: record_matches(frame, &index, &obs, &result.inliers, last_verdicts),
         });
     }
     PoseOptCounts {
@@ -760,8 +618,12 @@ mod tests {
     use super::*;
     use crate::data::KeyFrameId;
     use crate::module::test_map::{scene, scene_with, shifted, twc};
-    use crate::techniques::{mcor_gate, FrameView, McorMatch, McorVerdict};
-    use crate::techniques::{AvcGate, FRAME_VIEW_SOURCE_BIT};
+    use crate::techniques::mcor::{
+        frame_sightings, map_point_cluster, mcor_frame_gate, mcor_frame_gate_with, mcor_gate,
+        McorCluster, McorMatch,
+    };
+    use crate::techniques::params::{ClusterViews, Sightings, Verdict};
+    use crate::techniques::{AvcGate, FrameView, FRAME_VIEW_SOURCE_BIT};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

@@ -1,12 +1,9 @@
 //! The paper's two noise-resilience techniques as standalone building blocks, and the data
 //! helpers of its analyses:
-//! - [`mcor`]: Map-point Consensus based Outlier Rejection (III-A, Algorithm 1) — per-map-point
-//!   clusters of back-projected observations, FL / CL metrics and the hierarchical gate run
-//!   before every pose-optimization round;
-//! - [`mcor_prepared`]: the same gate over clusters summed once per frame (what the system
-//!   runs; exact);
-//! - [`mcor_views`]: the every-frame reading of MC-OR's cluster (frame views stored on map
-//!   points);
+//! - [`mcor`]: Map-point Consensus based Outlier Rejection (III-A, Algorithm 1), one folder:
+//!   per-map-point clusters of back-projected observations, FL / CL metrics, the hierarchical
+//!   gate, its exact fast path over prepared clusters, the frame's cluster cache, and the hook
+//!   run before every pose-optimization round;
 //! - [`avc`]: the Adaptive Virtual Camera (III-B, Eq. 8-12): its 4-D residual, a
 //!   [`crate::optimize::CameraResidual`] for pose-only optimization and bundle adjustment (in
 //!   [`crate::optimize::virtual_camera`]), and the measurement a keypoint with depth gets;
@@ -15,18 +12,18 @@
 //! - [`correlation`]: the error terms and Pearson correlations of Table II.
 //!
 //! The system switches them on through `Config::mcor` / `Config::avc`
-//! ([`params`]); the hook points are in [`crate::module::pose_estimation`].
+//! ([`params`]); the hook points are in [`crate::module::pose_estimation`], MC-OR's a call of
+//! [`mcor::RoundGate`].
 
 pub mod avc;
 pub mod correlation;
 pub mod mcor;
-pub mod mcor_prepared;
-pub mod mcor_views;
 pub mod params;
 pub mod rigid_consensus;
 #[cfg(test)]
 mod test_support;
 
+pub use crate::data::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
 pub use avc::{avc_measurement, virtual_camera_direction, VirtualCameraRef, VirtualCameraResidual};
 pub use correlation::{correlation_analysis, error_terms, pearson, CorrelationTable, ErrorTerms};
 pub use mcor::{
@@ -34,7 +31,6 @@ pub use mcor::{
     Exceeded, FeatureMetrics, McorCluster, McorMatch, McorMetrics, McorOutcome, McorSelection,
     McorVerdict, SightingsJudgement, MCOR_CLUSTER_CAPACITY,
 };
-pub use mcor_views::{FrameView, FrameViews, FRAME_VIEW_SOURCE_BIT};
 pub use params::{
     AvcAim, AvcGate, AvcParams, BaselineRole, ClusterViews, McorParams, Scope, Sightings, Verdict,
 };

@@ -10,21 +10,21 @@
 //! (a new keyframe, local mapping and its BA, fusion and culling, loop closing, a global BA) is
 //! the owner's to report with [`ClusterCache::invalidate`]; the [`System`](crate::system::System)
 //! does so before a frame whenever the map changed since the last one. Each cluster is built
-//! as [`map_point_cluster`](super::pose_estimation::map_point_cluster) builds it, feature for
+//! as [`map_point_cluster`](super::frame_gate::map_point_cluster) builds it, feature for
 //! feature, with each keyframe's inverse pose computed once per map state instead of once per
 //! feature. Before this cache every gate rebuilt every cluster: 54 % of an MC-OR run's
 //! instructions on the 300-frame kinect sequence.
 //!
-//! Beside the clusters, the cache keeps the verdicts of the frame being gated ([`crate::techniques::mcor_prepared::GateMemo`]),
+//! Beside the clusters, the cache keeps the verdicts of the frame being gated ([`GateMemo`]),
 //! so that its gates compute a verdict again only when the pose moved far enough to change it.
 
 use nalgebra::Isometry3;
 
+use super::cluster::ClusterFeature;
+use super::prepared::{GateMemo, PreparedCluster};
+use crate::data::{FrameView, FrameViews};
 use crate::data::{KeyFrameId, Map, MapPointId};
-use crate::techniques::mcor::ClusterFeature;
-use crate::techniques::mcor_prepared::{GateMemo, PreparedCluster};
 use crate::techniques::params::{ClusterViews, McorParams};
-use crate::techniques::{FrameView, FrameViews};
 use crate::Camera;
 
 /// A generation no slot is ever tagged with (the cache starts at generation 0).
@@ -156,7 +156,7 @@ impl ClusterCache {
             cluster.add_folded(sum, count);
             for v in m.views.views() {
                 let twk = poses(self, v.reference).twc_any;
-                cluster.push(&v.feature_placed_by(twk.as_ref()));
+                cluster.push(&ClusterFeature::of_view_placed_by(v, twk.as_ref()));
             }
         }
         cluster.seal();
@@ -214,7 +214,7 @@ impl ClusterCache {
             return;
         }
         let twk = self.poses(map, view.reference).twc_any;
-        let feature = view.feature_placed_by(twk.as_ref());
+        let feature = ClusterFeature::of_view_placed_by(view, twk.as_ref());
         self.clusters[id.index()]
             .1
             .push_view(&feature, views.folded(), views.views().len());

@@ -1,21 +1,26 @@
-//! The every-frame reading of MC-OR's cluster (paper III-A: a landmark "tracked across N camera
-//! views", its centroid G "updated after every camera viewpoint").
+//! A map point's frame views: the sightings by tracked frames that MC-OR's every-frame reading
+//! clusters (paper III-A: a landmark "tracked across N camera views", its centroid G "updated
+//! after every camera viewpoint"), stored on the point as the map's data.
 //!
-//! With [`crate::techniques::params::ClusterViews::EveryFrame`], every tracked frame that keeps a
+//! With `ClusterViews::EveryFrame` (MC-OR's `cluster_views`), every tracked frame that keeps a
 //! match of a map point as an inlier (under `sightings = "all"`: every matched sighting, outliers
-//! included; see `module::pose_estimation::frame_sightings`) and is not made a keyframe (a keyframe's observation is in
+//! included; see `techniques::mcor::frame_gate::frame_sightings`) and is not made a keyframe (a keyframe's observation is in
 //! the cluster already) stores its 3-D feature on the point. A view is kept relative to the
 //! frame's reference keyframe, so when bundle adjustment or a loop correction moves that
 //! keyframe the view moves with it, as keyframe observations do. Memory is bounded as
-//! [`McorCluster`]'s: the [`MCOR_CLUSTER_CAPACITY`] most recent views individually, older ones
+//! MC-OR's cluster's: the [`MCOR_CLUSTER_CAPACITY`] most recent views individually, older ones
 //! folded into a running world sum (placed where they were when folded).
 
 use std::collections::VecDeque;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use super::mcor::{ClusterFeature, McorCluster, MCOR_CLUSTER_CAPACITY};
-use crate::data::KeyFrameId;
+use crate::ids::KeyFrameId;
+
+/// How many sightings a map point's record, and MC-OR's cluster built from it, hold
+/// individually: the most recent ones; older ones are folded into a running sum of their world
+/// positions (the paper bounds neither; this bounds memory and the gate's cost).
+pub const MCOR_CLUSTER_CAPACITY: usize = 32;
 
 /// Tag of a frame view's `source` in a cluster (keyframe ids and the current frame's tag never
 /// carry this bit), so views never collide with keyframe observations.
@@ -71,22 +76,6 @@ impl FrameView {
             point_reference: (tkw * world).coords,
             point_world: world.coords,
         })
-    }
-
-    /// The view as a cluster feature, placed through its reference keyframe's pose `tkw`
-    /// (world to camera) when known, else where it was stored.
-    pub fn feature(&self, tkw: Option<&Isometry3<f64>>) -> ClusterFeature {
-        self.feature_placed_by(tkw.map(|t| t.inverse()).as_ref())
-    }
-
-    /// As [`feature`](Self::feature), given the inverse `twk` (keyframe to world) of the
-    /// reference keyframe's pose: for callers placing many views with one keyframe.
-    pub fn feature_placed_by(&self, twk: Option<&Isometry3<f64>>) -> ClusterFeature {
-        let world = match twk {
-            Some(t) => (t * Point3::from(self.point_reference)).coords,
-            None => self.point_world,
-        };
-        ClusterFeature::placed(FRAME_VIEW_SOURCE_BIT | self.frame, self.point_camera, world)
     }
 }
 
@@ -147,73 +136,11 @@ impl FrameViews {
     pub fn is_empty(&self) -> bool {
         self.total_count() == 0
     }
-
-    /// Adds the views to `cluster` after its keyframe features: the folded sum, then each view
-    /// placed with its reference keyframe's current pose `tkw_of(reference)` (world to camera).
-    pub fn extend_cluster(
-        &self,
-        cluster: &mut McorCluster,
-        mut tkw_of: impl FnMut(KeyFrameId) -> Option<Isometry3<f64>>,
-    ) {
-        cluster.add_folded(self.folded_sum, self.folded_count);
-        for v in &self.recent {
-            let tkw = tkw_of(v.reference);
-            cluster.push_distinct(v.feature(tkw.as_ref()));
-        }
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{Translation3, UnitQuaternion};
-
-    fn pose(x: f64, yaw: f64) -> Isometry3<f64> {
-        Isometry3::from_parts(
-            Translation3::new(x, 0.2, -0.1),
-            UnitQuaternion::from_euler_angles(0.0, 0.1, yaw),
-        )
-    }
-
-    #[test]
-    fn a_view_follows_its_reference_keyframe() {
-        let tcw = pose(0.3, 0.2);
-        let tkw = pose(0.1, -0.1);
-        let p = Vector3::new(0.2, -0.1, 1.7);
-        let v = FrameView::new(7, &tcw, KeyFrameId(3), &tkw, p).unwrap();
-        let world = (tcw.inverse() * Point3::from(p)).coords;
-        assert!((v.feature(Some(&tkw)).point_world() - world).norm() < 1e-12);
-        // The keyframe moves by a correction C (new Twk = C * Twk): the view moves with it.
-        let c = pose(0.5, 0.4);
-        let tkw_new = tkw * c.inverse();
-        let moved = v.feature(Some(&tkw_new)).point_world();
-        assert!((moved - (c * Point3::from(world)).coords).norm() < 1e-12);
-        // Its keyframe gone, it stays where it was stored; its depth is the frame's.
-        assert_eq!(v.feature(None).point_world(), world);
-        assert_eq!(v.feature(None).depth(), 1.7);
-        assert!(
-            FrameView::new(1, &tcw, KeyFrameId(0), &tkw, Vector3::new(0.0, 0.0, -1.0)).is_none()
-        );
-    }
-
-    #[test]
-    fn views_are_bounded_and_the_centroid_counts_every_view() {
-        let id = Isometry3::identity();
-        let mut views = FrameViews::default();
-        let n = MCOR_CLUSTER_CAPACITY + 8;
-        for f in 0..n {
-            let p = Vector3::new(f as f64, 0.0, 1.0);
-            views.push(FrameView::new(f as u64, &id, KeyFrameId(0), &id, p).unwrap());
-        }
-        assert_eq!(views.views().len(), MCOR_CLUSTER_CAPACITY);
-        assert_eq!(views.total_count(), n as u64);
-        assert_eq!(views.views().next().unwrap().frame, 8);
-        let mut cluster = McorCluster::new();
-        views.extend_cluster(&mut cluster, |_| Some(id));
-        assert_eq!(cluster.total_count(), n as u64);
-        let mean_x = (0..n).map(|f| f as f64).sum::<f64>() / n as f64;
-        assert!((cluster.centroid().unwrap().x - mean_x).abs() < 1e-12);
-    }
 
     #[test]
     fn merging_keeps_frame_order_and_drops_repeats() {

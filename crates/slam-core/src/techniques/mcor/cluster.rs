@@ -53,8 +53,9 @@ use nalgebra::{Isometry3, Point3, Vector3};
 
 use crate::techniques::params::McorParams;
 
-/// Most recent features a cluster keeps individually; older ones only count in G's running sum.
-pub const MCOR_CLUSTER_CAPACITY: usize = 32;
+/// Most recent features a cluster keeps individually; older ones only count in G's running sum
+/// (the bound of a map point's stored frame views too, where it is defined).
+pub use crate::data::MCOR_CLUSTER_CAPACITY;
 
 /// The `source` tag of the current frame's feature while it is gated (never stored).
 pub const CURRENT_FRAME_SOURCE: u64 = u64::MAX;

@@ -1,11 +1,11 @@
-//! MC-OR's gate (Algorithm 1, [`mcor_gate`](super::mcor::mcor_gate)) over prepared clusters:
+//! MC-OR's gate (Algorithm 1, [`mcor_gate`](super::cluster::mcor_gate)) over prepared clusters:
 //! the same verdicts, bit for bit, at a fraction of the cost.
 //!
 //! While the map stands still (a frame's tracking, and the frames between two keyframes) the
 //! map points and their clusters do not move; only the frame's pose does, between
 //! pose-optimization rounds, and a tracked frame appends its views. So everything of a cluster
 //! that does not involve the current feature X_cur is summed once, in the order
-//! [`McorCluster::metrics`](super::mcor::McorCluster::metrics) sums it (floating-point sums are
+//! [`McorCluster::metrics`](super::cluster::McorCluster::metrics) sums it (floating-point sums are
 //! not associative, so the order is part of the result): G's numerator over the folded sum and
 //! the ring, and the sum of |M - X_i| over the ring. A round then adds X_cur to those sums
 //! and needs the ring only for CL2 = mean |G - X_i|, which depends on G and so on the pose.
@@ -21,8 +21,8 @@
 
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
-use super::mcor::{ClusterFeature, McorVerdict, MCOR_CLUSTER_CAPACITY};
-use super::mcor::{ClusterMetrics, FeatureMetrics, McorMetrics};
+use super::cluster::{ClusterFeature, McorVerdict, MCOR_CLUSTER_CAPACITY};
+use super::cluster::{ClusterMetrics, FeatureMetrics, McorMetrics};
 use crate::ids::MapPointId;
 use crate::techniques::params::{ClusterViews, McorParams};
 
@@ -164,7 +164,7 @@ impl PreparedCluster {
     }
 
     /// Appends a frame view to a sealed cluster and re-seals it, as a cluster rebuilt from a
-    /// map point whose [`FrameViews`](super::FrameViews) just took `feature` would be:
+    /// map point whose [`FrameViews`](crate::data::FrameViews) just took `feature` would be:
     /// `views_folded` is the views' folded sum and count after the push, and `views_kept`
     /// how many views they hold individually (their oldest ones beyond it are dropped here,
     /// since the views folded them).
@@ -189,7 +189,7 @@ impl PreparedCluster {
     /// Algorithm 1's verdict for a match of this cluster whose keypoint back-projects to
     /// `point_camera` (camera frame; `None` without depth; passed through [`gate_point`] once
     /// per match), with the frame at `twc` (camera to world): the verdict
-    /// [`mcor_gate`](super::mcor::mcor_gate) gives for the same cluster, bit for bit.
+    /// [`mcor_gate`](super::cluster::mcor_gate) gives for the same cluster, bit for bit.
     pub fn verdict(
         &self,
         params: &McorParams,
@@ -218,7 +218,7 @@ impl PreparedCluster {
     /// Every metric of Algorithm 1 for a match of this cluster (as [`verdict`](Self::verdict)
     /// takes it), computed in full: the verdict's fast path stops at the first metric that
     /// decides, so this is what tells which thresholds a rejection exceeded
-    /// ([`Exceeded`](super::mcor::Exceeded)). For analysis (a tapped run), not the gate.
+    /// ([`Exceeded`](super::cluster::Exceeded)). For analysis (a tapped run), not the gate.
     pub fn metrics(
         &self,
         params: &McorParams,
@@ -605,8 +605,8 @@ impl GateMemo {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::techniques::mcor::{mcor_gate, Exceeded, McorCluster, McorMatch};
-    use crate::techniques::mcor_views::FRAME_VIEW_SOURCE_BIT;
+    use crate::data::FRAME_VIEW_SOURCE_BIT;
+    use crate::techniques::mcor::cluster::{mcor_gate, Exceeded, McorCluster, McorMatch};
     use crate::techniques::test_support::{gaussian, rng};
     use nalgebra::{Translation3, UnitQuaternion};
     use rand::Rng;
