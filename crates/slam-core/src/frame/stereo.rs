@@ -91,6 +91,157 @@ pub struct StereoInput<'a> {
     pub scale: &'a ScaleInfo,
 }
 
+/// The right keypoints listed by image row: keypoint j on every row within its band (the row
+/// tolerance scaled by its octave), so a left keypoint reads its candidates off its row.
+struct RowIndex {
+    /// Where each row's list starts in `items` (one more entry than rows).
+    start: Vec<u32>,
+    /// The rows' lists of right keypoint indices, one after another.
+    items: Vec<u32>,
+}
+
+impl RowIndex {
+    fn build(input: &StereoInput<'_>, params: &StereoParams, rows: usize) -> Self {
+        let band = |kp: &KeyPoint| {
+            let r = params.row_band * input.scale.scale_factors[kp.octave];
+            let lo = (kp.y as f64 - r).floor().max(0.0) as usize;
+            let hi = ((kp.y as f64 + r).ceil().max(0.0) as usize).min(rows - 1);
+            (lo, hi)
+        };
+        let mut start = vec![0u32; rows + 1];
+        for kp in input.right {
+            let (lo, hi) = band(kp);
+            for y in lo..=hi {
+                start[y + 1] += 1;
+            }
+        }
+        for y in 0..rows {
+            start[y + 1] += start[y];
+        }
+        let mut fill = start[..rows].to_vec();
+        let mut items = vec![0u32; start[rows] as usize];
+        for (j, kp) in input.right.iter().enumerate() {
+            let (lo, hi) = band(kp);
+            for y in lo..=hi {
+                items[fill[y] as usize] = j as u32;
+                fill[y] += 1;
+            }
+        }
+        Self { start, items }
+    }
+
+    /// The right keypoints listed on `row`.
+    fn on_row(&self, row: usize) -> &[u32] {
+        &self.items[self.start[row] as usize..self.start[row + 1] as usize]
+    }
+}
+
+/// The right keypoint of `cands` nearest in descriptor to left keypoint `i` among those within
+/// one octave of it and with `u_r` in `[min_u, max_u]`: its index and distance (`usize::MAX`,
+/// `u32::MAX` when none).
+fn best_descriptor_match(
+    input: &StereoInput<'_>,
+    i: usize,
+    cands: &[u32],
+    (min_u, max_u): (f64, f64),
+) -> (usize, u32) {
+    let level = input.left[i].octave;
+    let mut best_dist = u32::MAX;
+    let mut best_j = usize::MAX;
+    for &j in cands {
+        let kp_r = &input.right[j as usize];
+        if kp_r.octave + 1 < level || kp_r.octave > level + 1 {
+            continue;
+        }
+        let u_r = kp_r.x as f64;
+        if u_r < min_u || u_r > max_u {
+            continue;
+        }
+        let d = hamming(&input.left_desc[i], &input.right_desc[j as usize]);
+        if d < best_dist {
+            best_dist = d;
+            best_j = j as usize;
+        }
+    }
+    (best_j, best_dist)
+}
+
+/// The SAD curve's buffers, kept across keypoints.
+struct SadBuffers {
+    sads: Vec<u32>,
+    ssds: Vec<u64>,
+    scratch: SadScratch,
+}
+
+/// Sub-pixel refinement of left keypoint `i` against right keypoint `best_j` by SAD on the left
+/// keypoint's level: the right coordinate (level-0 pixels) and the best SAD, or `None` where the
+/// window leaves an image, the minimum sits on the search's edge, or the parabola is flat or
+/// its vertex beyond a pixel.
+fn refine_subpixel(
+    input: &StereoInput<'_>,
+    i: usize,
+    best_j: usize,
+    params: &StereoParams,
+    buffers: &mut SadBuffers,
+) -> Option<(f64, u32)> {
+    let w = params.sad_half_window as isize;
+    let l = params.sad_search as isize;
+    let kp_l = &input.left[i];
+    let (u_l, v_l) = (kp_l.x as f64, kp_l.y as f64);
+    let level = kp_l.octave;
+    let (img_l, img_r) = (
+        input.left_pyr.levels.get(level)?,
+        input.right_pyr.levels.get(level)?,
+    );
+    let map = LevelMap::new(input.left_pyr.levels.first()?, img_l);
+    let map_r = LevelMap::new(input.right_pyr.levels.first()?, img_r);
+    let su_l = map.to_level_x(u_l).round() as isize;
+    let sv_l = map.to_level_y(v_l).round() as isize;
+    let su_r0 = map_r.to_level_x(input.right[best_j].x as f64).round() as isize;
+    let (lw, lh) = (img_l.width as isize, img_l.height as isize);
+    let rw = img_r.width as isize;
+    if su_l - w < 0 || su_l + w >= lw || sv_l - w < 0 || sv_l + w >= lh {
+        return None;
+    }
+    if su_r0 - l - w < 0 || su_r0 + l + w >= rw || sv_l + w >= img_r.height as isize {
+        return None;
+    }
+    let win = (2 * w + 1) as usize;
+    let n_inc = (2 * l + 1) as usize;
+    let (sads, ssds) = (&mut buffers.sads[..n_inc], &mut buffers.ssds[..n_inc]);
+    sad_curve(
+        (img_l, (su_l - w) as usize),
+        (img_r, (su_r0 - l - w) as usize),
+        (sv_l - w) as usize,
+        win,
+        &mut buffers.scratch,
+        sads,
+        ssds,
+    );
+    let mut best_sad = u32::MAX;
+    let mut best_inc = 0isize;
+    for (inc, &sad) in (-l..=l).zip(sads.iter()) {
+        if sad < best_sad {
+            best_sad = sad;
+            best_inc = inc;
+        }
+    }
+    if best_inc == -l || best_inc == l {
+        return None;
+    }
+    let k = (best_inc + l) as usize;
+    let (d1, d2, d3) = (ssds[k - 1] as f64, ssds[k] as f64, ssds[k + 1] as f64);
+    let denom = 2.0 * (d1 + d3 - 2.0 * d2);
+    if denom <= 0.0 {
+        return None;
+    }
+    let delta = (d1 - d3) / denom;
+    if !(-1.0..=1.0).contains(&delta) {
+        return None;
+    }
+    Some((map_r.to_base_x((su_r0 + best_inc) as f64 + delta), best_sad))
+}
+
 /// Computes, per left keypoint, the right coordinate `u_right` (level-0 pixels, -1 when
 /// unmatched) and the depth `bf / disparity` in metres (-1 when unmatched). `bf` is the
 /// baseline times fx, `fx` the focal length (the largest disparity searched is `fx`, i.e.
@@ -104,141 +255,45 @@ pub fn compute_stereo_matches(
     let n = input.left.len();
     let mut u_right = vec![-1.0f32; n];
     let mut depth = vec![-1.0f32; n];
-    let Some(base_r) = input.right_pyr.levels.first() else {
-        return (u_right, depth);
-    };
-    let Some(base_l) = input.left_pyr.levels.first() else {
+    let (Some(base_r), Some(_)) = (
+        input.right_pyr.levels.first(),
+        input.left_pyr.levels.first(),
+    ) else {
         return (u_right, depth);
     };
     let rows = base_r.height;
     if rows == 0 || input.right.is_empty() {
         return (u_right, depth);
     }
-
-    // Row index of the right keypoints: keypoint j is listed on every row within its band.
-    let band = |kp: &KeyPoint| {
-        let r = params.row_band * input.scale.scale_factors[kp.octave];
-        let lo = (kp.y as f64 - r).floor().max(0.0) as usize;
-        let hi = ((kp.y as f64 + r).ceil().max(0.0) as usize).min(rows - 1);
-        (lo, hi)
-    };
-    let mut start = vec![0u32; rows + 1];
-    for kp in input.right {
-        let (lo, hi) = band(kp);
-        for y in lo..=hi {
-            start[y + 1] += 1;
-        }
-    }
-    for y in 0..rows {
-        start[y + 1] += start[y];
-    }
-    let mut fill = start[..rows].to_vec();
-    let mut items = vec![0u32; start[rows] as usize];
-    for (j, kp) in input.right.iter().enumerate() {
-        let (lo, hi) = band(kp);
-        for y in lo..=hi {
-            items[fill[y] as usize] = j as u32;
-            fill[y] += 1;
-        }
-    }
-
+    let index = RowIndex::build(input, params, rows);
     let min_d = 0.0f64;
     let max_d = fx; // bf / (baseline) = fx
-    let w = params.sad_half_window as isize;
-    let l = params.sad_search as isize;
-    let mut sads = vec![0u32; 2 * params.sad_search + 1];
-    let mut ssds = vec![0u64; 2 * params.sad_search + 1];
+    let mut buffers = SadBuffers {
+        sads: vec![0u32; 2 * params.sad_search + 1],
+        ssds: vec![0u64; 2 * params.sad_search + 1],
+        scratch: SadScratch::default(),
+    };
     let mut accepted: Vec<(u32, usize)> = Vec::new();
-    let mut sad_scratch = SadScratch::default();
-
     for (i, kp_l) in input.left.iter().enumerate() {
-        let v_l = kp_l.y as f64;
-        let u_l = kp_l.x as f64;
+        let (u_l, v_l) = (kp_l.x as f64, kp_l.y as f64);
         let row = v_l.round();
         if row < 0.0 || row as usize >= rows {
             continue;
         }
-        let row = row as usize;
-        let cands = &items[start[row] as usize..start[row + 1] as usize];
+        let cands = index.on_row(row as usize);
         if cands.is_empty() {
             continue;
         }
-        let level = kp_l.octave;
-        let (min_u, max_u) = (u_l - max_d, u_l - min_d);
-        let mut best_dist = u32::MAX;
-        let mut best_j = usize::MAX;
-        for &j in cands {
-            let kp_r = &input.right[j as usize];
-            if kp_r.octave + 1 < level || kp_r.octave > level + 1 {
-                continue;
-            }
-            let u_r = kp_r.x as f64;
-            if u_r < min_u || u_r > max_u {
-                continue;
-            }
-            let d = hamming(&input.left_desc[i], &input.right_desc[j as usize]);
-            if d < best_dist {
-                best_dist = d;
-                best_j = j as usize;
-            }
-        }
+        let (best_j, best_dist) =
+            best_descriptor_match(input, i, cands, (u_l - max_d, u_l - min_d));
         if best_dist >= params.max_descriptor_distance {
             continue;
         }
-
-        // Sub-pixel refinement by SAD on the left keypoint's level.
-        let (Some(img_l), Some(img_r)) = (
-            input.left_pyr.levels.get(level),
-            input.right_pyr.levels.get(level),
-        ) else {
+        let Some((mut best_u_r, best_sad)) =
+            refine_subpixel(input, i, best_j, params, &mut buffers)
+        else {
             continue;
         };
-        let map = LevelMap::new(base_l, img_l);
-        let map_r = LevelMap::new(base_r, img_r);
-        let su_l = map.to_level_x(u_l).round() as isize;
-        let sv_l = map.to_level_y(v_l).round() as isize;
-        let su_r0 = map_r.to_level_x(input.right[best_j].x as f64).round() as isize;
-        let (lw, lh) = (img_l.width as isize, img_l.height as isize);
-        let rw = img_r.width as isize;
-        if su_l - w < 0 || su_l + w >= lw || sv_l - w < 0 || sv_l + w >= lh {
-            continue;
-        }
-        if su_r0 - l - w < 0 || su_r0 + l + w >= rw || sv_l + w >= img_r.height as isize {
-            continue;
-        }
-        let win = (2 * w + 1) as usize;
-        let n_inc = (2 * l + 1) as usize;
-        sad_curve(
-            (img_l, (su_l - w) as usize),
-            (img_r, (su_r0 - l - w) as usize),
-            (sv_l - w) as usize,
-            win,
-            &mut sad_scratch,
-            &mut sads[..n_inc],
-            &mut ssds[..n_inc],
-        );
-        let mut best_sad = u32::MAX;
-        let mut best_inc = 0isize;
-        for (inc, &sad) in (-l..=l).zip(sads.iter()) {
-            if sad < best_sad {
-                best_sad = sad;
-                best_inc = inc;
-            }
-        }
-        if best_inc == -l || best_inc == l {
-            continue;
-        }
-        let k = (best_inc + l) as usize;
-        let (d1, d2, d3) = (ssds[k - 1] as f64, ssds[k] as f64, ssds[k + 1] as f64);
-        let denom = 2.0 * (d1 + d3 - 2.0 * d2);
-        if denom <= 0.0 {
-            continue;
-        }
-        let delta = (d1 - d3) / denom;
-        if !(-1.0..=1.0).contains(&delta) {
-            continue;
-        }
-        let mut best_u_r = map_r.to_base_x((su_r0 + best_inc) as f64 + delta);
         let mut disparity = u_l - best_u_r;
         if disparity >= min_d && disparity < max_d {
             if disparity <= 0.0 {
@@ -250,7 +305,6 @@ pub fn compute_stereo_matches(
             accepted.push((best_sad, i));
         }
     }
-
     // Drop matches whose correlation is far worse than the typical one.
     if !accepted.is_empty() {
         let mut s: Vec<u32> = accepted.iter().map(|a| a.0).collect();

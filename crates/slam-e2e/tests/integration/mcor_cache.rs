@@ -1,4 +1,4 @@
-//! MC-OR's cluster cache (slam_core::module::mcor_clusters) against the map it caches: a
+//! MC-OR's cluster cache (slam_core::techniques::mcor::cache) against the map it caches: a
 //! system tracking people walking through the room, with keyframes, local mapping, culling and
 //! fusion moving the map under it, checks every kept cluster a gate uses against one rebuilt
 //! from the map, and every verdict kept across a frame's gates against one computed at the
