@@ -443,9 +443,21 @@ pub fn figures_for(
     labels: &std::collections::BTreeMap<String, String>,
     catalog: Option<&Catalog>,
 ) -> Result<()> {
+    let fig = dir.join("figures");
+    spread_figures(&fig, records, labels, catalog)?;
+    trajectory_figures(&fig, dir, records, labels)
+}
+
+/// The figures over runs: the ATE spread per sequence and system (Fig. 9, the paper's figure
+/// marked where it has one), and rc's ATE relative to the baseline's where both ran.
+fn spread_figures(
+    fig: &Path,
+    records: &[crate::sweep::store::RunRecord],
+    labels: &std::collections::BTreeMap<String, String>,
+    catalog: Option<&Catalog>,
+) -> Result<()> {
     use crate::report::markdown::system_label;
     use crate::sweep::plan::ConfigKind;
-    let fig = dir.join("figures");
     // Every system is drawn under its heading in the tables; groups are keyed by configuration
     // here and take their headings when drawn.
     let mut groups: Vec<(String, String, Vec<f64>)> = Vec::new();
@@ -521,6 +533,18 @@ pub fn figures_for(
             &named,
         )?;
     }
+    Ok(())
+}
+
+/// Per sequence, from seed 0's files: the top-view trajectories aligned to the ground truth
+/// (Fig. 1) and the outlier ratio over frames (Fig. 8), one colour and heading per system.
+fn trajectory_figures(
+    fig: &Path,
+    dir: &Path,
+    records: &[crate::sweep::store::RunRecord],
+    labels: &std::collections::BTreeMap<String, String>,
+) -> Result<()> {
+    use crate::report::markdown::system_label;
     // Trajectory folders are named by configuration with '+' as '-'.
     let configs: Vec<&str> = {
         let mut v: Vec<&str> = records.iter().map(|r| r.config.as_str()).collect();
