@@ -7,7 +7,6 @@
 
 mod analysis;
 mod bench;
-mod columns;
 mod commands;
 mod config_file;
 mod cpu_time;
@@ -16,18 +15,18 @@ mod external;
 mod file_name;
 #[cfg(test)]
 mod fuzz_cli;
-mod readings;
 mod recording;
 mod regress;
-mod report;
 mod runner;
 mod seeded_runs;
 mod select;
-mod suggest;
 mod sweep;
 mod vocab_file;
 
 use clap::{Parser, Subcommand};
+// The results folder and its report are the `results` crate's; these names keep `crate::report`
+// and the others where the commands look for them.
+use results::{columns, readings, report, suggest};
 use std::process::ExitCode;
 
 /// Noise-resilient RGB-D / stereo visual SLAM (ORB-SLAM2 class, with the MC-OR and AVC

@@ -91,7 +91,7 @@ pub fn choose(flag: Option<&Path>) -> Result<VocabularyChoice> {
 }
 
 /// File name of the vocabulary shipped in `assets/vocabulary/` and compiled into the binary.
-pub const DEFAULT_NAME: &str = "noisefree-k10L5.voc";
+pub use results::systems::BUILT_IN_VOCABULARY as DEFAULT_NAME;
 
 /// The bytes of the shipped vocabulary (k 10, L 5, trained on synthetic renderings and the
 /// real EuRoC frames of ../shared/data; recipe in assets/vocabulary/README.md).

@@ -5,4 +5,4 @@
 
 pub mod export;
 pub mod process;
-pub mod system;
+pub use results::systems as system;

@@ -4,12 +4,9 @@
 //! append-only, resumable record of finished runs ([`store`]), what they cost ([`cost`]) and
 //! the runs a folder was asked for ([`planned`]).
 
-pub mod cost;
 pub mod execute;
 pub mod external_run;
 pub mod job;
 pub mod plan;
-pub mod planned;
 pub mod progress;
-pub mod spread;
-pub mod store;
+pub use results::{cost, planned, spread, store};

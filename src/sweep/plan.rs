@@ -4,19 +4,7 @@
 use anyhow::{bail, Context, Result};
 
 pub use crate::columns::{ConfigKind, RunConfig};
-
-/// Parameters of one run beyond its configuration kind. `None` where the kind does not use it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, PartialOrd)]
-pub struct Params {
-    /// MC-OR tau_MF, metres.
-    pub tau_mf: Option<f64>,
-    /// MC-OR tau_GF, metres.
-    pub tau_gf: Option<f64>,
-    /// MC-OR tau_MG, metres.
-    pub tau_mg: Option<f64>,
-    /// AVC baseline b, metres.
-    pub baseline: Option<f64>,
-}
+pub use results::keys::{perturbation_key, run_key, Params, Shard};
 
 /// One run of a sweep.
 #[derive(Clone, Debug, PartialEq)]
@@ -98,12 +86,6 @@ pub struct PerturbPoint {
     pub level: Option<f64>,
     /// Seed of the perturbation's draws.
     pub seed: u64,
-}
-
-/// The part of a run's key its perturbation adds (absent in sweeps without one, so their keys
-/// are unchanged).
-pub fn perturbation_key(chain: &str, seed: u64) -> String {
-    format!("|p={chain}|ps={seed}")
 }
 
 /// The points of `--perturb` axes over a fixed `--perturb-with` chain: one per level of each
@@ -215,28 +197,6 @@ pub fn table3_twins(catalog: &datasets::Catalog) -> (Vec<String>, Vec<String>) {
     (twins, missing)
 }
 
-fn fmt_opt(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
-
-/// The key of a run from its fields (shared by [`Job::key`] and the CSV records).
-pub fn run_key(
-    sequence: &str,
-    config: &str,
-    p: &Params,
-    seed: u64,
-    synth_seed: Option<u64>,
-) -> String {
-    format!(
-        "{sequence}|{config}|{}|{}|{}|{}|{seed}|{}",
-        fmt_opt(p.tau_mf),
-        fmt_opt(p.tau_gf),
-        fmt_opt(p.tau_mg),
-        fmt_opt(p.baseline),
-        synth_seed.map(|s| s.to_string()).unwrap_or_default()
-    )
-}
-
 /// The grids of a sweep: each list holds the values to try (defaults: the paper's).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grids {
@@ -330,73 +290,6 @@ pub fn expand(
         }
     }
     jobs
-}
-
-/// A 1-based slice `index` of `count` of a job list.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Shard {
-    /// 1-based shard number.
-    pub index: usize,
-    /// Number of shards.
-    pub count: usize,
-}
-
-impl Shard {
-    /// Parses `K/N` with 1 <= K <= N.
-    pub fn parse(s: &str) -> Result<Shard> {
-        let (k, n) = s
-            .split_once('/')
-            .with_context(|| format!("--shard {s:?}: expected K/N, e.g. 3/8"))?;
-        let index: usize = k
-            .trim()
-            .parse()
-            .with_context(|| format!("--shard {s:?}: K is not a number"))?;
-        let count: usize = n
-            .trim()
-            .parse()
-            .with_context(|| format!("--shard {s:?}: N is not a number"))?;
-        if count == 0 || index == 0 || index > count {
-            bail!("--shard {s:?}: need 1 <= K <= N");
-        }
-        Ok(Shard { index, count })
-    }
-
-    /// The shard of a Slurm job array, from SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT and
-    /// SLURM_ARRAY_TASK_MIN (so `--array=0-7` and `--array=1-8` both work).
-    pub fn from_slurm(get: impl Fn(&str) -> Option<String>) -> Result<Option<Shard>> {
-        let (Some(id), Some(count)) = (get("SLURM_ARRAY_TASK_ID"), get("SLURM_ARRAY_TASK_COUNT"))
-        else {
-            return Ok(None);
-        };
-        let id: usize = id
-            .trim()
-            .parse()
-            .context("SLURM_ARRAY_TASK_ID is not a number")?;
-        let count: usize = count
-            .trim()
-            .parse()
-            .context("SLURM_ARRAY_TASK_COUNT is not a number")?;
-        let min: usize = match get("SLURM_ARRAY_TASK_MIN") {
-            Some(m) => m
-                .trim()
-                .parse()
-                .context("SLURM_ARRAY_TASK_MIN is not a number")?,
-            None => 0,
-        };
-        if id < min || id - min >= count {
-            bail!("SLURM_ARRAY_TASK_ID {id} is outside the array (min {min}, count {count}); use a contiguous --array");
-        }
-        Ok(Some(Shard {
-            index: id - min + 1,
-            count,
-        }))
-    }
-
-    /// Whether job number `i` (0-based position in the full list) belongs to this shard.
-    /// Round-robin, so every shard gets a similar mix of sequences and configurations.
-    pub fn contains(&self, i: usize) -> bool {
-        i % self.count == self.index - 1
-    }
 }
 
 /// Parses a list `0.1,0.3,0.5` or a range `start:stop:step` (inclusive of stop, as the paper's

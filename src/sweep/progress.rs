@@ -207,15 +207,7 @@ impl Cost {
     }
 }
 
-/// Seconds as `1h02m03s` / `2m03s` / `3s`.
-pub fn hms(s: f64) -> String {
-    let s = s.max(0.0).round() as u64;
-    match (s / 3600, s / 60 % 60, s % 60) {
-        (0, 0, sec) => format!("{sec}s"),
-        (0, m, sec) => format!("{m}m{sec:02}s"),
-        (h, m, sec) => format!("{h}h{m:02}m{sec:02}s"),
-    }
-}
+pub use results::cost::hms;
 
 #[cfg(test)]
 mod tests {

@@ -938,7 +938,7 @@ pub fn findings(dirs: &[PathBuf], base: &Path, catalog: &Catalog) -> Result<Find
     let mut left_out = Vec::new();
     let mut complete = Vec::new();
     for d in dirs {
-        match crate::sweep::planned::completeness_of(d)? {
+        match crate::planned::completeness_of(d)? {
             Some(c) if !c.is_complete() => left_out.push((d.clone(), c)),
             _ => complete.push(d.clone()),
         }

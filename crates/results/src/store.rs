@@ -4,7 +4,7 @@
 //! open, and a run whose key is already recorded is not run again — so an interrupted sweep
 //! resumes where it stopped and the file never holds a half row.
 
-use super::plan::{perturbation_key, run_key, Params, Shard};
+use crate::keys::{perturbation_key, run_key, Params, Shard};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use slam_core::system::ClusterViews;
@@ -120,7 +120,7 @@ impl RunRecord {
     /// A finished, unperturbed run of `config` on `sequence` for tests: 100 frames all tracked at
     /// 100 frames/s, 5 keyframes, 500 map points, 300 inliers and 10 outliers a frame, synthetic
     /// seed 0, no loop closed; change what a test is about with struct update syntax.
-    pub(crate) fn example(sequence: &str, config: &str, seed: u64, ate: f64) -> RunRecord {
+    pub fn example(sequence: &str, config: &str, seed: u64, ate: f64) -> RunRecord {
         RunRecord {
             sequence: sequence.into(),
             config: config.into(),

@@ -3,10 +3,10 @@
 //! **breaking level**: the first level, mildest first, whose mean ATE exceeds
 //! max(2 x its level-0 ATE, level-0 ATE + 1 cm), or where more than half of its runs fail.
 
+use crate::columns::ConfigKind;
 use crate::report::markdown::{system_label, Rendered};
 use crate::report::tables::{ate_columns, ATE_COLUMNS};
-use crate::sweep::plan::ConfigKind;
-use crate::sweep::store::RunRecord;
+use crate::store::RunRecord;
 use perturb::Family;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

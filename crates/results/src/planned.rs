@@ -4,7 +4,7 @@
 //! record then holds fewer runs than asked for, and tables made from it would look complete.
 //! With the plan beside the record, the folder's index and the findings say what is missing.
 
-use crate::sweep::store::RunRecord;
+use crate::store::RunRecord;
 use anyhow::{Context, Result};
 use ate_eval::io::write_atomic;
 use std::collections::{BTreeMap, BTreeSet};
@@ -94,7 +94,7 @@ impl Completeness {
     }
 }
 
-/// How much of the plan of folder `dir` the `records` (the folder's, [`crate::sweep::store::load_dir`])
+/// How much of the plan of folder `dir` the `records` (the folder's, [`crate::store::load_dir`])
 /// hold; `None` when the folder has no plan. Recorded runs outside the plan (copied in from
 /// another folder, say) count for nothing either way.
 pub fn completeness(dir: &Path, records: &[RunRecord]) -> Result<Option<Completeness>> {
@@ -107,10 +107,10 @@ pub fn completeness_of(dir: &Path) -> Result<Option<Completeness>> {
     let Some(plan) = planned(dir)? else {
         return Ok(None);
     };
-    if !crate::sweep::store::is_sweep_dir(dir) {
+    if !crate::store::is_sweep_dir(dir) {
         return Ok(None);
     }
-    let records = crate::sweep::store::load_dir(dir)?;
+    let records = crate::store::load_dir(dir)?;
     Ok(Some(against(&plan, &records)))
 }
 

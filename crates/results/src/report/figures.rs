@@ -14,9 +14,9 @@ static FONT: Once = Once::new();
 
 /// Registers the embedded DejaVu Sans as "sans-serif" (once per process), so a machine without
 /// fonts draws every figure's text.
-pub(crate) fn register_font() {
+pub fn register_font() {
     FONT.call_once(|| {
-        let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+        let bytes: &'static [u8] = include_bytes!("../../../../assets/fonts/DejaVuSans.ttf");
         // Registration fails only on a corrupt font file, which the build embeds; ignore.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
     });
@@ -33,7 +33,7 @@ const PALETTE: [RGBColor; 6] = [
 ];
 
 /// A plotters error as the figures report it.
-pub(crate) fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+pub fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing a figure: {e:?}")
 }
 
@@ -41,7 +41,7 @@ pub(crate) fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
 /// at `path` (the caller renames it into place). The figures draw into memory and encode with
 /// the `image` crate the rest of noisefree uses, rather than through plotters' own encoder (a
 /// second `image` version to build).
-pub(crate) fn write_png(path: &Path, size: (u32, u32), pixels: Vec<u8>) -> Result<()> {
+pub fn write_png(path: &Path, size: (u32, u32), pixels: Vec<u8>) -> Result<()> {
     let img = image::RgbImage::from_raw(size.0, size.1, pixels)
         .ok_or_else(|| anyhow!("a {}x{} figure buffer has the wrong size", size.0, size.1))?;
     img.save_with_format(path, image::ImageFormat::Png)
@@ -92,7 +92,7 @@ macro_rules! both {
 /// Where a figure's legend box sits and how large its labels are (translucent white, black
 /// border, for every figure).
 #[derive(Clone, Copy)]
-pub(crate) struct LegendStyle {
+pub struct LegendStyle {
     /// The corner of the plot: upper left when true, upper right otherwise.
     pub upper_left: bool,
     /// Label size in pixels.
@@ -102,14 +102,14 @@ pub(crate) struct LegendStyle {
 }
 
 /// The results figures' legend: upper left (their axes leave room there), 18 px labels.
-pub(crate) const RESULTS_LEGEND: LegendStyle = LegendStyle {
+pub const RESULTS_LEGEND: LegendStyle = LegendStyle {
     upper_left: true,
     font_px: 18,
     opacity: 0.8,
 };
 
 /// Draws the legend of `chart`'s labelled series in `style`.
-pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64>>(
+pub fn draw_legend<'a, DB: DrawingBackend + 'a, Y: Ranged<ValueType = f64>>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
     style: LegendStyle,
 ) -> Result<()> {

@@ -1,7 +1,7 @@
 //! How every table is written: one [`Rendered`] per table (Markdown with its heading and notes,
 //! and a CSV of the same rows), and the headings systems go by.
 
-use crate::sweep::plan::ConfigKind;
+use crate::columns::ConfigKind;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 

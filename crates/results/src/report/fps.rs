@@ -12,7 +12,7 @@ use crate::report::tables::{fps_cell, our_runs, sequence_order};
 use crate::report::versus::{
     compare, difference_text, holm_where_tested, p_text, pair_key, PairKey, ALPHA,
 };
-use crate::sweep::store::RunRecord;
+use crate::store::RunRecord;
 use datasets::Catalog;
 use std::collections::BTreeMap;
 

@@ -4,7 +4,7 @@
 //! run-to-run spread (`--mapping-lag`, `--vary-sequence`, per-run perturbation draws) n runs
 //! of a cell are usually one; a table's `± 0.000` and an untested comparison then say so.
 
-use crate::sweep::store::RunRecord;
+use crate::store::RunRecord;
 use std::collections::BTreeMap;
 
 /// What a cell's runs share, as a printable key.

@@ -7,11 +7,11 @@
 //! row carries the paper's ORB-SLAM2 figure and the paper's relative difference for the same
 //! technique on the sequence the twin imitates, beside ours.
 
+use crate::columns::ConfigKind;
 use crate::report::markdown::{counted, render, system_label, Rendered};
 use crate::report::stats::{holm, paired, summarize, welch, Comparison, Summary};
 use crate::report::tables::{are_default_params, mm_decimals, num, sequence_order};
-use crate::sweep::plan::ConfigKind;
-use crate::sweep::store::RunRecord;
+use crate::store::RunRecord;
 use datasets::Catalog;
 use std::cmp::Ordering;
 use std::collections::BTreeMap;
@@ -159,11 +159,7 @@ struct Row {
 
 /// The paper's figure (metres) of `config`'s column for the row `seq` is or imitates, with its
 /// ORB-SLAM2 figure and the row's name.
-pub(crate) fn paper_figures(
-    catalog: &Catalog,
-    seq: &str,
-    config: &str,
-) -> Option<(f64, f64, String)> {
+pub fn paper_figures(catalog: &Catalog, seq: &str, config: &str) -> Option<(f64, f64, String)> {
     let entry = catalog.get(seq).ok()?;
     let row = match entry.imitates.as_deref() {
         Some(name) => catalog.get(name).ok()?,
@@ -530,12 +526,12 @@ pub fn p_text(p: f64) -> String {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+pub mod tests {
     use super::*;
 
     /// A run of `config` on `seq` with the given seed, ATE and perturbation point (a test
     /// record the report's other tests build on).
-    pub(crate) fn record(
+    pub fn record(
         seq: &str,
         config: &str,
         seed: u64,

@@ -5,8 +5,7 @@
 //! thus keeps its whole cost, and `noisefree table` sums it in the folder's index: frames run
 //! per CPU-second is the sweep's throughput per core even on a machine it shared.
 
-use crate::sweep::plan::Shard;
-use crate::sweep::progress::hms;
+use crate::keys::Shard;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -151,6 +150,17 @@ impl CostTotal {
             self.invocations,
             if self.invocations == 1 { "" } else { "s" }
         )
+    }
+}
+
+/// A duration in seconds as `12s`, `3m05s` or `2h04m09s`: how a sweep's progress and a
+/// folder's costs print time.
+pub fn hms(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    match (s / 3600, s / 60 % 60, s % 60) {
+        (0, 0, sec) => format!("{sec}s"),
+        (0, m, sec) => format!("{m}m{sec:02}s"),
+        (h, m, sec) => format!("{h}h{m:02}m{sec:02}s"),
     }
 }
 

@@ -4,7 +4,7 @@
 
 use crate::report::markdown::Rendered;
 use crate::report::tables::{loops_table, table1, table3, table4, threshold_grid};
-use crate::sweep::store::{load_dir, settings_of};
+use crate::store::{load_dir, settings_of};
 use anyhow::Result;
 use ate_eval::io::write_atomic;
 use datasets::Catalog;
@@ -37,10 +37,10 @@ pub fn tables_for(dir: &Path, catalog: &Catalog, paper: bool) -> Result<String> 
         dir.display(),
         records.len()
     );
-    let defs = crate::external::system::systems_of(dir)?;
+    let defs = crate::systems::systems_of(dir)?;
     let vocabularies: std::collections::BTreeMap<String, String> = defs
         .iter()
-        .map(|(n, d)| (n.clone(), crate::external::system::vocabulary_note(d)))
+        .map(|(n, d)| (n.clone(), crate::systems::vocabulary_note(d)))
         .collect();
     let labels: std::collections::BTreeMap<String, String> = defs
         .into_iter()
@@ -210,7 +210,7 @@ fn figure_caption(stem: &str) -> Option<String> {
 /// vocabularies), a link to every table and every figure shown with a line on what it shows.
 fn write_index(
     dir: &Path,
-    records: &[crate::sweep::store::RunRecord],
+    records: &[crate::store::RunRecord],
     labels: &std::collections::BTreeMap<String, String>,
     vocabularies: &std::collections::BTreeMap<String, String>,
     tables: &[(String, String)],
@@ -236,8 +236,8 @@ fn write_index(
     sequences.dedup();
     let mut systems: Vec<&str> = records.iter().map(|r| r.config.as_str()).collect();
     systems.sort_by_key(|n| {
-        crate::sweep::plan::ConfigKind::parse(n).map_or(usize::MAX, |k| {
-            crate::sweep::plan::ConfigKind::EVERY
+        crate::columns::ConfigKind::parse(n).map_or(usize::MAX, |k| {
+            crate::columns::ConfigKind::EVERY
                 .iter()
                 .position(|e| *e == k)
                 .unwrap_or(0)
@@ -275,7 +275,7 @@ fn write_index(
             .join(", "),
         sequences.join(", ")
     );
-    if let Some(c) = crate::sweep::planned::completeness(dir, records)? {
+    if let Some(c) = crate::planned::completeness(dir, records)? {
         if !c.is_complete() {
             let _ = writeln!(
                 md,
@@ -285,12 +285,12 @@ fn write_index(
             );
         }
     }
-    let cost = crate::sweep::cost::load_dir(dir)?;
+    let cost = crate::cost::load_dir(dir)?;
     if !cost.is_empty() {
-        let total = crate::sweep::cost::CostTotal::of(&cost);
+        let total = crate::cost::CostTotal::of(&cost);
         let _ = writeln!(md, "{}\n", total.sentence(records.len()));
     }
-    let settings = crate::sweep::store::settings_of(dir)?;
+    let settings = crate::store::settings_of(dir)?;
     let _ = write!(md, "Vocabularies: ours {}", settings.vocabulary);
     for (n, v) in vocabularies {
         if systems.contains(&n.as_str()) {
@@ -439,7 +439,7 @@ const RC_TOLERANCE: f64 = 0.03;
 /// (Fig. 1) and the outlier ratio over frames (Fig. 8).
 pub fn figures_for(
     dir: &Path,
-    records: &[crate::sweep::store::RunRecord],
+    records: &[crate::store::RunRecord],
     labels: &std::collections::BTreeMap<String, String>,
     catalog: Option<&Catalog>,
 ) -> Result<()> {
@@ -452,12 +452,12 @@ pub fn figures_for(
 /// marked where it has one), and rc's ATE relative to the baseline's where both ran.
 fn spread_figures(
     fig: &Path,
-    records: &[crate::sweep::store::RunRecord],
+    records: &[crate::store::RunRecord],
     labels: &std::collections::BTreeMap<String, String>,
     catalog: Option<&Catalog>,
 ) -> Result<()> {
+    use crate::columns::ConfigKind;
     use crate::report::markdown::system_label;
-    use crate::sweep::plan::ConfigKind;
     // Every system is drawn under its heading in the tables; groups are keyed by configuration
     // here and take their headings when drawn.
     let mut groups: Vec<(String, String, Vec<f64>)> = Vec::new();
@@ -541,7 +541,7 @@ fn spread_figures(
 fn trajectory_figures(
     fig: &Path,
     dir: &Path,
-    records: &[crate::sweep::store::RunRecord],
+    records: &[crate::store::RunRecord],
     labels: &std::collections::BTreeMap<String, String>,
 ) -> Result<()> {
     use crate::report::markdown::system_label;

@@ -6,10 +6,10 @@
 //! why in its notes) and as a tidy CSV for notebooks: one row per group of runs (sequence,
 //! system, parameters) with numbers, not text (n, failed, mean, std, median, min, max, fps).
 
+use crate::columns::ConfigKind;
 use crate::report::markdown::{column_name, render, system_label, Rendered};
 use crate::report::stats::{summarize, Summary};
-use crate::sweep::plan::ConfigKind;
-use crate::sweep::store::{FolderSettings, RunRecord};
+use crate::store::{FolderSettings, RunRecord};
 use datasets::{Catalog, Class};
 use slam_core::system::ClusterViews;
 use std::collections::BTreeMap;
@@ -146,18 +146,18 @@ struct Group<'a> {
 }
 
 /// `v` as a CSV number (every digit an f64 needs), empty when absent.
-pub(crate) fn num(v: Option<f64>) -> String {
+pub fn num(v: Option<f64>) -> String {
     v.map(|x| format!("{x}")).unwrap_or_default()
 }
 
 /// The ATE columns every tidy CSV carries, named as [`ate_columns`] fills them.
-pub(crate) const ATE_COLUMNS: [&str; 8] = [
+pub const ATE_COLUMNS: [&str; 8] = [
     "n", "failed", "failure", "mean_m", "std_m", "median_m", "min_m", "max_m",
 ];
 
 /// The [`ATE_COLUMNS`] of `n` runs of which `failed` failed, `ates` the ATEs (m) of the others
 /// in the order their mean sums them: a failure when more than half failed or none gave an ATE.
-pub(crate) fn ate_columns(n: usize, failed: usize, ates: &[f64]) -> [String; 8] {
+pub fn ate_columns(n: usize, failed: usize, ates: &[f64]) -> [String; 8] {
     let mut sorted = ates.to_vec();
     sorted.sort_by(f64::total_cmp);
     let stats = mean_std(ates);
@@ -306,7 +306,7 @@ fn others(records: &[RunRecord], shown: &[&str], labels: &BTreeMap<String, Strin
 }
 
 /// Whether a run has the parameters Table III reports.
-pub(crate) fn is_default(r: &RunRecord) -> bool {
+pub fn is_default(r: &RunRecord) -> bool {
     let taus = match (r.tau_mf, r.tau_gf, r.tau_mg) {
         (None, None, None) => Some(None),
         (Some(a), Some(b), Some(c)) => Some(Some((a, b, c))),
@@ -317,13 +317,13 @@ pub(crate) fn is_default(r: &RunRecord) -> bool {
 
 /// Whether MC-OR's thresholds and AVC's b (absent: not a parameter of the system) are the ones
 /// Table III reports.
-pub(crate) fn are_default_params(taus: Option<(f64, f64, f64)>, b: Option<f64>) -> bool {
+pub fn are_default_params(taus: Option<(f64, f64, f64)>, b: Option<f64>) -> bool {
     taus.is_none_or(|t| t == DEFAULT_TAUS) && b.is_none_or(|b| b == DEFAULT_BASELINE)
 }
 
 /// Sequences in table order: catalog order (easy before hard as the paper groups them), then
 /// any other label alphabetically.
-pub(crate) fn sequence_order(records: &[RunRecord], catalog: &Catalog) -> Vec<String> {
+pub fn sequence_order(records: &[RunRecord], catalog: &Catalog) -> Vec<String> {
     let mut present: Vec<String> = records.iter().map(|r| r.sequence.clone()).collect();
     present.sort();
     present.dedup();
@@ -602,7 +602,7 @@ fn table3_protocol_notes(
         } else {
             ""
         },
-        match crate::sweep::spread::identical_cells(&shown_in_table3(records)) {
+        match crate::spread::identical_cells(&shown_in_table3(records)) {
             (several, identical) if !identical.is_empty() => format!(
                 " In {} of the {several} cells with several runs every run gave the same result: \
                  there the runs are one run (± 0 is no spread, and no test compares them).",
@@ -955,11 +955,7 @@ pub fn table1(
 }
 
 /// Our runs of `config` on `seq` with the parameters Table III reports, in record order.
-pub(crate) fn our_runs<'a>(
-    records: &'a [RunRecord],
-    seq: &str,
-    config: &str,
-) -> Vec<&'a RunRecord> {
+pub fn our_runs<'a>(records: &'a [RunRecord], seq: &str, config: &str) -> Vec<&'a RunRecord> {
     records
         .iter()
         .filter(|r| r.sequence == seq && r.config == config && is_default(r))
@@ -1228,7 +1224,7 @@ pub fn threshold_grid(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::store::RunRecord;
+    use crate::store::RunRecord;
 
     fn record(sequence: &str, ate: f64) -> RunRecord {
         RunRecord {

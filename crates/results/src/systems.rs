@@ -401,10 +401,14 @@ pub fn vocabulary_note(def: &SystemDef) -> String {
         },
         None => format!(
             "noisefree's built-in vocabulary ({}) as DBoW2 text",
-            crate::vocab_file::DEFAULT_NAME
+            BUILT_IN_VOCABULARY
         ),
     }
 }
+
+/// File name of the vocabulary shipped in `assets/vocabulary/` and compiled into the binary:
+/// what a system without its own vocabulary is given, converted to DBoW2 text.
+pub const BUILT_IN_VOCABULARY: &str = "noisefree-k10L5.voc";
 
 /// The file of a sweep folder that records the definition of every external system its runs
 /// used: the tables take their column headings from it, and a sweep with another definition
@@ -503,7 +507,7 @@ mod tests {
 
     #[test]
     fn the_shipped_definitions_are_valid() {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("systems/orbslam.toml");
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../systems/orbslam.toml");
         let defs = systems_in_file(&p).unwrap();
         for name in ["orbslam2", "orbslam3", "noisefree-external"] {
             for sensor in [SensorKind::Rgbd, SensorKind::Stereo] {
