@@ -45,7 +45,7 @@ pub fn write(path: &Path, voc: &Vocabulary) -> Result<()> {
     } else {
         voc.to_binary()
     };
-    ate_eval::io::write_atomic(path, &bytes)?;
+    atomic_file::write(path, &bytes)?;
     Ok(())
 }
 

@@ -16,7 +16,7 @@ use crate::analysis::figures::{
 use crate::analysis::outliers::{self, error_summary, mean_tracked, OutlierData};
 use crate::config_file::{apply_switches, base_config, Switches};
 use anyhow::{bail, Context, Result};
-use ate_eval::io::write_atomic;
+use atomic_file::write as write_atomic;
 use slam_core::system::{ClusterViews, Config, McorParams};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -25,7 +25,7 @@ use crate::commands::shared_args::SystemArgs;
 use crate::seeded_runs::system_config;
 use crate::select::{open, LoadOptions, Source};
 use anyhow::{bail, Result};
-use ate_eval::io::write_atomic;
+use atomic_file::write as write_atomic;
 use std::path::PathBuf;
 
 /// Arguments of `noisefree bench`.

@@ -4,7 +4,7 @@
 
 use crate::report::findings::{findings, splice};
 use anyhow::{bail, Context, Result};
-use ate_eval::io::write_atomic;
+use atomic_file::write as write_atomic;
 use datasets::Catalog;
 use std::path::{Path, PathBuf};
 

@@ -53,7 +53,7 @@ pub fn run(args: SettingsArgs) -> Result<()> {
     match &args.out {
         None => print!("{text}"),
         Some(p) => {
-            ate_eval::io::write_atomic(p, text.as_bytes())
+            atomic_file::write(p, text.as_bytes())
                 .with_context(|| format!("writing {}", p.display()))?;
             eprintln!(
                 "wrote the {} settings of {} to {}",

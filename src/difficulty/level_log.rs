@@ -85,7 +85,7 @@ impl LevelLog {
         for o in &self.recorded {
             text.push_str(&level_line(o));
         }
-        ate_eval::io::write_atomic(&self.path, text.as_bytes())
+        atomic_file::write(&self.path, text.as_bytes())
             .with_context(|| format!("writing {}", self.path.display()))
     }
 }

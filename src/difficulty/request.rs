@@ -5,7 +5,7 @@
 
 use super::{MatchResult, MatchStatus};
 use anyhow::{bail, Context, Result};
-use ate_eval::io::write_atomic;
+use atomic_file::write as write_atomic;
 use datasets::catalog::Entry;
 use perturb::{NamedChain, Subject};
 use std::path::Path;

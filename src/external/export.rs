@@ -46,7 +46,7 @@ impl OnDisk {
     fn write_settings_files(&self) -> Result<()> {
         for format in [SettingsFormat::Orbslam2, SettingsFormat::Orbslam3] {
             let text = write_settings(&self.settings, format, &self.label);
-            ate_eval::io::write_atomic(&self.settings_file(format), text.as_bytes())?;
+            atomic_file::write(&self.settings_file(format), text.as_bytes())?;
         }
         Ok(())
     }
@@ -58,7 +58,7 @@ pub fn cache_root(dir: &Path) -> Result<PathBuf> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let ignore = dir.join(".gitignore");
     if !ignore.exists() {
-        ate_eval::io::write_atomic(
+        atomic_file::write(
             &ignore,
             b"# noisefree's cache of sequences written for external systems\n*\n",
         )?;
@@ -169,7 +169,7 @@ pub fn prepare(
                 let _ = writeln!(text, "{} {} {} {}", a.stamp, a.file, b.stamp, b.file);
             }
             let path = aux.join("associations.txt");
-            ate_eval::io::write_atomic(&path, text.as_bytes())?;
+            atomic_file::write(&path, text.as_bytes())?;
             out.associations = Some(path);
         }
         Format::EurocStereo => {
@@ -201,8 +201,8 @@ pub fn prepare(
                 .map(|&s| format!("{}\n", datasets::euroc::ns_to_s(s)))
                 .collect();
             let (p_ns, p_s) = (aux.join("times.txt"), aux.join("times_s.txt"));
-            ate_eval::io::write_atomic(&p_ns, ns.as_bytes())?;
-            ate_eval::io::write_atomic(&p_s, s.as_bytes())?;
+            atomic_file::write(&p_ns, ns.as_bytes())?;
+            atomic_file::write(&p_s, s.as_bytes())?;
             out.times_ns = Some(p_ns);
             out.times_s = Some(p_s);
             out.cam0 = Some(mav0.join("cam0/data"));

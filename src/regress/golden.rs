@@ -163,7 +163,7 @@ impl Golden {
     /// Writes the golden file atomically, with its explanatory header.
     pub fn write(&self, path: &Path) -> Result<()> {
         let body = toml::to_string(self).context("serialising the golden file")?;
-        ate_eval::io::write_atomic(path, format!("{HEADER}\n{body}").as_bytes())?;
+        atomic_file::write(path, format!("{HEADER}\n{body}").as_bytes())?;
         Ok(())
     }
 

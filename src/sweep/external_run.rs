@@ -175,7 +175,7 @@ fn launch(
         .map(|(k, v)| format!("{k}={}", shell_quote(v)))
         .chain(argv.iter().map(|a| shell_quote(a)))
         .collect();
-    ate_eval::io::write_atomic(
+    atomic_file::write(
         &dir.join("command.txt"),
         format!(
             "cd {} && {}\n",
@@ -261,7 +261,7 @@ fn score(
     }
     if let Some(r) = &reason {
         let tail = process::tail(stderr, 5);
-        ate_eval::io::write_atomic(
+        atomic_file::write(
             &dir.join("failure.txt"),
             format!("{r}\n\nlast lines of stderr:\n{tail}\n").as_bytes(),
         )?;

@@ -15,7 +15,7 @@ use crate::stamps::{self, Row, StampPolicy};
 use crate::trajectory::Trajectory;
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The trajectory file formats understood by [`read_trajectory`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -423,41 +423,21 @@ pub fn format_kitti(traj: &Trajectory) -> String {
     s
 }
 
-/// Writes `contents` to `path` atomically: a temporary file beside it, then a rename. The
-/// temporary name is the writer's own (process and call), so threads or processes writing the
-/// same path at once never write into one temporary file; a temporary file that cannot be
-/// written whole or renamed is removed.
-pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
-    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let io_err = |cause| Error::Io {
-        path: path.to_path_buf(),
-        cause,
-    };
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(io_err)?;
-    }
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(format!(
-        ".tmp{}-{}",
-        std::process::id(),
-        CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-    ));
-    let tmp = PathBuf::from(tmp);
-    let written = std::fs::write(&tmp, contents)
-        .map_err(|cause| Error::Io {
-            path: tmp.clone(),
-            cause,
-        })
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(io_err));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    written
+/// Writes `contents` to `path` whole or not at all ([`atomic_file::write`]), as this crate's
+/// error.
+fn write_whole(path: &Path, contents: &[u8]) -> Result<()> {
+    atomic_file::write(path, contents).map_err(|e| match e {
+        atomic_file::WriteError::Io { path, cause } => Error::Io { path, cause },
+        atomic_file::WriteError::Occupied { path } => Error::Io {
+            path,
+            cause: std::io::Error::from(std::io::ErrorKind::AlreadyExists),
+        },
+    })
 }
 
 /// Writes a TUM trajectory atomically.
 pub fn write_tum(path: &Path, traj: &Trajectory) -> Result<()> {
-    write_atomic(path, format_tum(traj).as_bytes())
+    write_whole(path, format_tum(traj).as_bytes())
 }
 
 /// Writes a trajectory in the given format atomically (KITTI drops the stamps).
@@ -467,7 +447,7 @@ pub fn write_trajectory(path: &Path, traj: &Trajectory, format: Format) -> Resul
         Format::Euroc => format_euroc(traj),
         Format::Kitti => format_kitti(traj),
     };
-    write_atomic(path, text.as_bytes())
+    write_whole(path, text.as_bytes())
 }
 
 /// Reads the `T_BS` 4x4 matrix of an EuRoC `sensor.yaml` (row-major `data: [...]`): the pose
@@ -519,29 +499,7 @@ pub fn read_euroc_t_bs(path: &Path) -> Result<Isometry3<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn writers_of_one_path_at_once_each_write_a_whole_file() {
-        let dir = std::env::temp_dir().join(format!("ate-eval-atomic-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let path = dir.join("out.bin");
-        let contents: Vec<Vec<u8>> = (0..8u8).map(|k| vec![k; 1 << 20]).collect();
-        std::thread::scope(|s| {
-            for c in &contents {
-                let path = &path;
-                s.spawn(move || {
-                    for _ in 0..4 {
-                        write_atomic(path, c).expect("every write succeeds");
-                    }
-                });
-            }
-        });
-        let written = std::fs::read(&path).unwrap();
-        assert!(contents.contains(&written), "one writer's whole file");
-        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
-        assert_eq!(left.len(), 1, "no temporary file left behind");
-        let _ = std::fs::remove_dir_all(&dir);
-    }
+    use std::path::PathBuf;
 
     fn tmp_file(name: &str, contents: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("ate-eval-io-{}", std::process::id()));

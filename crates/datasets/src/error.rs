@@ -137,6 +137,15 @@ fn suggest(s: &[String]) -> String {
     }
 }
 
+impl From<atomic_file::WriteError> for DatasetError {
+    fn from(e: atomic_file::WriteError) -> Self {
+        match e {
+            atomic_file::WriteError::Io { path, cause } => DatasetError::io(path, cause),
+            atomic_file::WriteError::Occupied { path } => DatasetError::OutputExists { path },
+        }
+    }
+}
+
 impl DatasetError {
     /// Wraps an I/O error with the path it happened on.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {

@@ -6,7 +6,7 @@
 
 use crate::store::RunRecord;
 use anyhow::{Context, Result};
-use ate_eval::io::write_atomic;
+use atomic_file::write as write_atomic;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 

@@ -403,7 +403,7 @@ pub fn pin_settings(dir: &Path, settings: &FolderSettings) -> Result<()> {
     if !settings.readings.is_empty() {
         text += &format!("readings = {:?}\n", settings.readings);
     }
-    ate_eval::io::write_atomic(&path, text.as_bytes())
+    atomic_file::write(&path, text.as_bytes())
         .with_context(|| format!("writing {}", path.display()))
 }
 
@@ -634,11 +634,11 @@ impl RunStore {
                 for r in &records {
                     text.push_str(&row(r)?);
                 }
-                ate_eval::io::write_atomic(&path, text.as_bytes())?;
+                atomic_file::write(&path, text.as_bytes())?;
             }
             done = records.iter().map(RunRecord::key).collect();
         } else {
-            ate_eval::io::write_atomic(&path, header().as_bytes())?;
+            atomic_file::write(&path, header().as_bytes())?;
         }
         let file = OpenOptions::new()
             .append(true)

@@ -477,7 +477,7 @@ pub fn pin_systems(
         })
         .context("writing the system definitions")?
     );
-    ate_eval::io::write_atomic(&dir.join(SYSTEMS_FILE), text.as_bytes())?;
+    atomic_file::write(&dir.join(SYSTEMS_FILE), text.as_bytes())?;
     Ok(())
 }
 

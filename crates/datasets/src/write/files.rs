@@ -3,73 +3,41 @@
 
 use std::fs;
 use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
 
 use crate::DatasetError;
 
-/// Writes the folder `target` through a staging folder `.<name>.tmp-<pid>` beside it: `write`
-/// fills the staging folder, which then moves into place, or is removed when `write` fails.
-/// `target` must not exist or be empty ([`DatasetError::OutputExists`] otherwise), so nothing a
-/// user made is overwritten.
+/// Writes the folder `target` whole or not at all ([`atomic_file::write_folder`]: a staging
+/// folder beside it, renamed into place, or removed when `write` fails). `target` must not
+/// exist or be empty ([`DatasetError::OutputExists`] otherwise), so nothing a user made is
+/// overwritten.
 pub fn write_atomically<E: From<DatasetError>>(
     target: &Path,
     write: impl FnOnce(&Path) -> Result<(), E>,
 ) -> Result<(), E> {
-    let tmp = stage(target)?;
-    match write(&tmp) {
-        Ok(()) => Ok(commit(&tmp, target)?),
-        Err(e) => {
-            // Best effort: the error that matters is the writer's.
-            let _ = fs::remove_dir_all(&tmp);
-            Err(e)
+    /// The folder writer's error, or the filler's own.
+    enum Failed<E> {
+        Write(atomic_file::WriteError),
+        Fill(E),
+    }
+    impl<E> From<atomic_file::WriteError> for Failed<E> {
+        fn from(e: atomic_file::WriteError) -> Self {
+            Failed::Write(e)
         }
     }
+    atomic_file::write_folder(target, |tmp| write(tmp).map_err(Failed::Fill)).map_err(|e| match e {
+        Failed::Write(w) => DatasetError::from(w).into(),
+        Failed::Fill(e) => e,
+    })
 }
 
 /// Refuses an output folder that exists and is not empty ([`DatasetError::OutputExists`]): what
 /// [`write_atomically`] checks first, for a caller that wants to refuse before its work starts.
 pub fn refuse_occupied(target: &Path) -> Result<(), DatasetError> {
-    if target.exists() {
-        let mut entries = fs::read_dir(target).map_err(|e| DatasetError::io(target, e))?;
-        if entries.next().is_some() {
-            return Err(DatasetError::OutputExists {
-                path: target.to_path_buf(),
-            });
-        }
-    }
-    Ok(())
-}
-
-/// Creates the staging folder of `target` after checking that `target` is absent or empty.
-fn stage(target: &Path) -> Result<PathBuf, DatasetError> {
-    refuse_occupied(target)?;
-    let name = target
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let parent = match target.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    fs::create_dir_all(&parent).map_err(|e| DatasetError::io(&parent, e))?;
-    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
-    if tmp.exists() {
-        fs::remove_dir_all(&tmp).map_err(|e| DatasetError::io(&tmp, e))?;
-    }
-    fs::create_dir_all(&tmp).map_err(|e| DatasetError::io(&tmp, e))?;
-    Ok(tmp)
-}
-
-/// Moves the staging folder `tmp` to `target` (an empty `target` is replaced).
-fn commit(tmp: &Path, target: &Path) -> Result<(), DatasetError> {
-    if target.exists() {
-        // Known to be empty (checked in `stage`).
-        fs::remove_dir(target).map_err(|e| DatasetError::io(target, e))?;
-    }
-    fs::rename(tmp, target).map_err(|e| DatasetError::io(target, e))
+    Ok(atomic_file::refuse_occupied(target)?)
 }
 
 /// Creates a folder and its parents.
@@ -132,6 +100,7 @@ pub fn depth_png(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     fn temp(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("ds-write-{name}-{}", std::process::id()));

@@ -143,7 +143,7 @@ pub fn write(
         image::ImageFormat::Png,
     )
     .context("encoding the contact sheet")?;
-    ate_eval::io::write_atomic(path, &bytes)?;
+    atomic_file::write(path, &bytes)?;
     Ok(())
 }
 

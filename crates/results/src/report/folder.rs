@@ -6,7 +6,7 @@ use crate::report::markdown::Rendered;
 use crate::report::tables::{loops_table, table1, table3, table4, threshold_grid};
 use crate::store::{load_dir, settings_of};
 use anyhow::Result;
-use ate_eval::io::write_atomic;
+use atomic_file::write as write_atomic;
 use datasets::Catalog;
 use std::path::{Path, PathBuf};
 

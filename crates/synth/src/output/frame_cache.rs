@@ -151,7 +151,7 @@ impl CachedFrames {
             .is_ok();
         // Best effort: a folder that is full or cannot be written costs renders, not results.
         if afforded {
-            let _ = ate_eval::io::write_atomic(&path, &bytes);
+            let _ = atomic_file::write(&path, &bytes);
         }
         (input, pose)
     }
