@@ -7,10 +7,9 @@
 //! - [`association`]: the truth of each match (same point, mismatch, moving object);
 //! - [`outliers`]: Fig. 8 (inliers / outliers per frame with and without MC-OR) and Fig. 7 (one
 //!   frame with the features MC-OR rejected);
-//! - [`figures`]: the drawings of both.
+//! - their drawings are the report's (`results::report::panels`).
 
 pub mod association;
 pub mod correlation;
-pub mod figures;
 pub mod outliers;
 pub mod stream;

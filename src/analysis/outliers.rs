@@ -9,8 +9,8 @@ use crate::analysis::association::{
     classify, Association, AssociationCounts, KeyframeTruth, TrackedTruth,
 };
 use crate::analysis::correlation::{depth_at_raw_pixel, median_abs};
-use crate::analysis::figures::{Mark, MarkedFeature};
 use crate::analysis::stream::{for_each_chunk, frame_input};
+use crate::report::panels::{Mark, MarkedFeature};
 use ate_eval::{evaluate_ate, AteOptions, Trajectory};
 use nalgebra::Isometry3;
 use slam_core::module::pose_estimation::{tap_pose_optimizations, PoseOptRecord};

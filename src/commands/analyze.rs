@@ -9,12 +9,12 @@
 //! The work is in [`crate::analysis`]; this module parses arguments, writes files and prints.
 
 use crate::analysis::correlation::{self as corr, markdown_table, Observation};
-use crate::analysis::figures::{
+use crate::analysis::outliers::{self, error_summary, mean_tracked, OutlierData};
+use crate::config_file::{apply_switches, base_config, Switches};
+use crate::report::panels::{
     per_frame_panels, rejected_features_image, Curve, Panel, BASELINE_COLOR, MCOR_COLOR,
     MOVING_COLOR, REJECTED_COLOR,
 };
-use crate::analysis::outliers::{self, error_summary, mean_tracked, OutlierData};
-use crate::config_file::{apply_switches, base_config, Switches};
 use anyhow::{bail, Context, Result};
 use atomic_file::write as write_atomic;
 use slam_core::system::{ClusterViews, Config, McorParams};
