@@ -534,6 +534,10 @@ fn match_bisects_to_a_target_and_says_when_it_is_out_of_reach() {
         &noisefree(&["match", "--seq", "kinect", "--target", "paper", "--out", o]),
         "imitates no TUM or EuRoC sequence",
     );
+    // `match` honours --vocabulary as `run` does: a missing file is refused, named.
+    let mut missing = base.to_vec();
+    missing.extend(["--target", "0.01", "--vocabulary", "nothere.voc"]);
+    assert_clean_failure(&noisefree(&missing), "nothere.voc");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

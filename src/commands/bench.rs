@@ -20,10 +20,11 @@
 //! [`McorParams::view_stride`](slam_core::techniques::params::McorParams::view_stride)). Variants
 //! combine: `mcor+avc:direct:stride2`.
 
+use super::shared_args::{Resolved, SourceArgs};
 use crate::bench::{column_width, figures_header, figures_rows, parse_configs, Bench};
 use crate::commands::shared_args::SystemArgs;
-use crate::seeded_runs::system_config;
-use crate::select::{open, LoadOptions, Source};
+use crate::config_file::Switches;
+use crate::select::{open, LoadOptions};
 use anyhow::{bail, Result};
 use atomic_file::write as write_atomic;
 use std::path::PathBuf;
@@ -31,12 +32,9 @@ use std::path::PathBuf;
 /// Arguments of `noisefree bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Catalogued sequence (a synthetic preset or a downloaded one) [default: `kinect`].
-    #[arg(long, value_name = "NAME", conflicts_with = "path")]
-    pub seq: Option<String>,
-    /// Any TUM RGB-D or EuRoC ASL folder (then "reading" is decoding its image files).
-    #[arg(long, value_name = "DIR")]
-    pub path: Option<PathBuf>,
+    /// The sequence: --seq NAME or --path DIR.
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// Frames (synthetic: generated; real: the first N).
     #[arg(long, default_value_t = 300, value_name = "N")]
     pub frames: usize,
@@ -86,7 +84,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     let kinds = parse_configs(&args.configs)?;
     let catalog = datasets::Catalog::embedded();
-    let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
+    let source = args.source.source();
     let opts = LoadOptions {
         data_dir: datasets::data_root(args.data_dir.as_deref()),
         frames: Some(args.frames),
@@ -96,14 +94,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
         frame_cache: None,
     };
     let (seq, reader) = open(&source, &catalog, &opts)?;
-    let base = system_config(
-        seq.camera.sensor,
-        args.system.config.as_deref(),
-        args.system.switches(),
-    )?;
-    let vocabulary =
-        crate::vocab_file::choose(args.system.vocabulary_flag()?.as_deref())?.vocabulary;
-    let bench = Bench::prepare(source.label(), seq, &reader, base, vocabulary)?;
+    let Resolved {
+        config: base,
+        vocabulary,
+    } = args
+        .system
+        .resolve(seq.camera.sensor, Switches::default())?;
+    let bench = Bench::prepare(source.label(), seq, &reader, base, vocabulary.vocabulary)?;
     if args.profile {
         println!("{}", bench.profile_line(kinds[0]));
         return Ok(());
@@ -129,8 +126,10 @@ mod tests {
 
     fn args(configs: &[&str], frames: usize) -> BenchArgs {
         BenchArgs {
-            seq: Some("clean".into()),
-            path: None,
+            source: SourceArgs {
+                seq: Some("clean".into()),
+                path: None,
+            },
             frames,
             configs: configs.iter().map(|c| c.to_string()).collect(),
             repeat: 2,

@@ -3,13 +3,13 @@
 //! and `match.csv` (every run of every step) written to `--out`, and `levels.jsonl` there as
 //! each level ends, so a stopped match resumes where it stopped.
 
-use crate::commands::shared_args::SequenceArgs;
-use crate::config_file::{base_config, overlay_file};
+use super::shared_args::{Resolved, SequenceArgs, SourceArgs, SystemArgs};
+use crate::config_file::Switches;
 use crate::difficulty::level_log::{self, Found, LevelLog};
 use crate::difficulty::request::{self, mm};
 use crate::difficulty::{bisect, LevelOutcome, MatchSetup};
 use crate::runner::remembering;
-use crate::select::{open, Source};
+use crate::select::open;
 use anyhow::{bail, Context, Result};
 use perturb::Subject;
 use std::path::PathBuf;
@@ -17,12 +17,9 @@ use std::path::PathBuf;
 /// Arguments of `noisefree match`.
 #[derive(clap::Args, Debug)]
 pub struct MatchArgs {
-    /// Catalogued sequence or synthetic preset (a twin: `twin_fr1_desk`).
-    #[arg(long, value_name = "NAME", conflicts_with = "path")]
-    pub seq: Option<String>,
-    /// Any TUM RGB-D or EuRoC ASL folder.
-    #[arg(long, value_name = "DIR")]
-    pub path: Option<PathBuf>,
+    /// The sequence: --seq NAME or --path DIR.
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// The named chain (`kinect-fr1`, `kinect-fr2`, `kinect-fr3`, `euroc`) or family whose level
     /// is sought [default: a twin's camera chain, from the sequence it imitates].
     #[arg(long, value_name = "CHAIN")]
@@ -46,9 +43,10 @@ pub struct MatchArgs {
     /// Stop when the median is within this share of the target.
     #[arg(long, default_value_t = 0.05, value_name = "SHARE")]
     pub tolerance: f64,
-    /// TOML configuration overlaid on the baseline's defaults (MC-OR and AVC stay as it says).
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    /// The baseline's settings file (MC-OR and AVC stay as it says), vocabulary, mapping lag and
+    /// loop closing.
+    #[command(flatten)]
+    pub system: SystemArgs,
     /// Parallel runs at once [default: all cores].
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -75,9 +73,9 @@ pub fn run(args: MatchArgs) -> Result<()> {
         bail!("--tolerance must be between 0 and 1 (a share of the target)");
     }
     let catalog = datasets::Catalog::embedded();
-    let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
+    let source = args.source.source();
     let label = source.label();
-    let entry = args.seq.as_deref().and_then(|s| catalog.get(s).ok());
+    let entry = args.source.seq.as_deref().and_then(|s| catalog.get(s).ok());
     let imitated = entry
         .and_then(|e| e.imitates.as_deref())
         .and_then(|name| catalog.get(name).ok());
@@ -94,11 +92,9 @@ pub fn run(args: MatchArgs) -> Result<()> {
     }
     let (w, h) = (seq.camera.width as usize, seq.camera.height as usize);
     let frames = remembering(frames, w * h * 8, 3 << 30);
-    let mut config = base_config(seq.camera.sensor);
-    if let Some(p) = &args.config {
-        config = overlay_file(&config, p)?;
-    }
-    let vocabulary = crate::vocab_file::choose(None)?;
+    let Resolved { config, vocabulary } = args
+        .system
+        .resolve(seq.camera.sensor, Switches::default())?;
     let setup = MatchSetup {
         seq: &seq,
         frames: &frames,

@@ -3,8 +3,9 @@
 //! ORB-SLAM2 / ORB-SLAM3 settings beside it, and optionally a contact sheet of four frames
 //! (input beside perturbed, titled: [`crate::report::contact_sheet`]).
 
+use super::shared_args::SourceArgs;
 use crate::commands::shared_args::SequenceArgs;
-use crate::select::{open, Source};
+use crate::select::open;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use perturb::{perturb_sequence, Chain, Domain, Family, NamedChain};
@@ -13,12 +14,9 @@ use std::path::PathBuf;
 /// Arguments of `noisefree perturb`.
 #[derive(clap::Args, Debug)]
 pub struct PerturbArgs {
-    /// Catalogued sequence or synthetic preset (default: the embedded `kinect`).
-    #[arg(long, value_name = "NAME", conflicts_with = "path")]
-    pub seq: Option<String>,
-    /// Any TUM RGB-D or EuRoC ASL folder.
-    #[arg(long, value_name = "DIR")]
-    pub path: Option<PathBuf>,
+    /// The sequence: --seq NAME or --path DIR.
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// The folder's camera from an ORB-SLAM2 / ORB-SLAM3 settings file.
     #[arg(long, value_name = "FILE.yaml", requires = "path")]
     pub camera: Option<PathBuf>,
@@ -115,7 +113,7 @@ pub fn run(args: PerturbArgs) -> Result<()> {
     let out = args.out.clone().context("--out is required")?;
     // Refused before the work starts, as the writer would refuse it at the end.
     datasets::write::files::refuse_occupied(&out)?;
-    let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
+    let source = args.source.source();
     let opts = args.sequence.load_options(args.camera.clone());
     let catalog = datasets::Catalog::embedded();
     let (seq, input) = open(&source, &catalog, &opts)?;

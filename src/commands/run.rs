@@ -2,10 +2,10 @@
 //! synthetic default), n seeded runs in parallel, writing each run's TUM trajectory, per-frame
 //! CSV and a JSON summary, and printing the ATE where ground truth exists.
 
+use super::shared_args::{Resolved, SourceArgs};
 use crate::commands::shared_args::{SequenceArgs, SystemArgs};
 use crate::config_file::{config_name, Switches};
-use crate::seeded_runs::{self, load, record, run_seeds, summarise, system_config};
-use crate::select::Source;
+use crate::seeded_runs::{self, load, record, run_seeds, summarise};
 use anyhow::{bail, Context, Result};
 use slam_core::system::ClusterViews;
 use std::path::PathBuf;
@@ -15,14 +15,9 @@ use std::path::PathBuf;
 #[allow(rustdoc::invalid_html_tags)]
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// Catalogued sequence (datasets.toml): a TUM / EuRoC name such as `fr2_coke` or `mh04`, or
-    /// a synthetic preset (`clean`, `kinect`, `boundary`, `walking`, `stereo`, ...).
-    /// Without --seq and --path: the embedded synthetic default (`kinect`, 300 frames).
-    #[arg(long, value_name = "NAME", conflicts_with = "path")]
-    pub seq: Option<String>,
-    /// Any TUM RGB-D or EuRoC ASL folder.
-    #[arg(long, value_name = "DIR")]
-    pub path: Option<PathBuf>,
+    /// The sequence: --seq NAME or --path DIR.
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// The folder's camera from an ORB-SLAM2 or ORB-SLAM3 settings file (YAML: intrinsics,
     /// distortion, bf, ThDepth, DepthMapFactor, a stereo pair's rectification) instead of the
     /// one its name (TUM) or sensor.yaml files (EuRoC) imply; `noisefree settings` writes one.
@@ -103,7 +98,7 @@ pub fn run(args: RunArgs) -> Result<()> {
             );
         }
     }
-    let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
+    let source = args.source.source();
     // Checked before anything is read.
     let chain =
         perturb::Chain::parse(args.perturb.as_deref().unwrap_or("")).context("--perturb")?;
@@ -125,14 +120,10 @@ pub fn run(args: RunArgs) -> Result<()> {
         avc: args.avc,
         mcor_cluster: args.mcor_cluster,
         rc: args.rc,
-        ..args.system.switches()
+        ..Switches::default()
     };
-    let config = system_config(
-        loaded.seq.camera.sensor,
-        args.system.config.as_deref(),
-        switches,
-    )?;
-    let vocabulary = crate::vocab_file::choose(args.system.vocabulary_flag()?.as_deref())?;
+    let Resolved { config, vocabulary } =
+        args.system.resolve(loaded.seq.camera.sensor, switches)?;
     let cname = config_name(&config);
     let out = args
         .out

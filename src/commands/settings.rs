@@ -1,7 +1,8 @@
 //! `noisefree settings`: a sequence's camera written as the settings file another SLAM system
 //! reads (ORB-SLAM2's or ORB-SLAM3's YAML), so it runs on the same files with the same camera.
 
-use crate::select::{open, LoadOptions, Source};
+use super::shared_args::SourceArgs;
+use crate::select::{open, LoadOptions};
 use anyhow::{Context, Result};
 use datasets::settings::{write_settings, CameraSettings, SettingsFormat};
 use std::path::PathBuf;
@@ -9,12 +10,9 @@ use std::path::PathBuf;
 /// Arguments of `noisefree settings`.
 #[derive(clap::Args, Debug)]
 pub struct SettingsArgs {
-    /// Catalogued sequence or synthetic preset (e.g. `twin_fr1_desk`, `stereo`, `fr2_desk`).
-    #[arg(long, value_name = "NAME", conflicts_with = "path")]
-    pub seq: Option<String>,
-    /// Any TUM RGB-D or EuRoC ASL folder.
-    #[arg(long, value_name = "DIR")]
-    pub path: Option<PathBuf>,
+    /// The sequence: --seq NAME or --path DIR.
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// Layout of the file: orbslam2 (ORB-SLAM2's TUM1.yaml / EuRoC.yaml) or orbslam3
     /// (`File.version: "1.0"`).
     #[arg(long, default_value = "orbslam2", value_parser = parse_format)]
@@ -38,7 +36,7 @@ pub fn parse_format(s: &str) -> std::result::Result<SettingsFormat, String> {
 
 /// Runs `noisefree settings`.
 pub fn run(args: SettingsArgs) -> Result<()> {
-    let source = Source::from_flags(args.seq.as_deref(), args.path.as_deref());
+    let source = args.source.source();
     let opts = LoadOptions {
         data_dir: datasets::data_root(args.data_dir.as_deref()),
         frames: Some(1),

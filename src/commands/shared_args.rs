@@ -3,9 +3,35 @@
 //! `--frames` or `--mapping-lag` means.
 
 use crate::config_file::{vocabulary_asked, Switches};
-use crate::select::LoadOptions;
+use crate::seeded_runs::system_config;
+use crate::select::{LoadOptions, Source};
+use crate::vocab_file::VocabularyChoice;
 use anyhow::Result;
+use slam_core::system::Config;
+use slam_core::SensorKind;
 use std::path::PathBuf;
+
+/// Which sequence a command reads: a catalogued name or any folder (`run`, `bench`, `match`,
+/// `perturb`, `settings`; `sweep` takes lists of both).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SourceArgs {
+    /// Catalogued sequence (datasets.toml): a TUM / EuRoC name such as `fr2_coke` or `mh04`, a
+    /// twin of a paper row (`twin_fr1_desk`) or a synthetic preset (`clean`, `kinect`,
+    /// `boundary`, `walking`, `stereo`, ...). Without --seq and --path: the embedded synthetic
+    /// default (`kinect`).
+    #[arg(long, value_name = "NAME", conflicts_with = "path")]
+    pub seq: Option<String>,
+    /// Any TUM RGB-D or EuRoC ASL folder.
+    #[arg(long, value_name = "DIR")]
+    pub path: Option<PathBuf>,
+}
+
+impl SourceArgs {
+    /// The sequence these flags name.
+    pub fn source(&self) -> Source {
+        Source::from_flags(self.seq.as_deref(), self.path.as_deref())
+    }
+}
 
 /// How a sequence is realised before anything reads it: its length, and for a synthetic one
 /// its seed and the effects switched off; where catalogued real sequences live.
@@ -71,21 +97,33 @@ pub struct SystemArgs {
 }
 
 impl SystemArgs {
-    /// The switches these flags set (the mapping lag, loop closing); a command adds its own
-    /// technique switches.
-    pub fn switches(&self) -> Switches {
-        Switches {
-            mapping_lag: self.mapping_lag,
-            no_loop_closing: self.no_loop_closing,
-            ..Switches::default()
-        }
-    }
-
     /// The vocabulary asked for: `--vocabulary`, else the `--config` file's `vocabulary`;
     /// `None`: the built-in one.
     pub fn vocabulary_flag(&self) -> Result<Option<PathBuf>> {
         vocabulary_asked(self.vocabulary.as_deref(), self.config.as_deref())
     }
+
+    /// The settings of a run, resolved once: the sensor's defaults, `--config` over them, the
+    /// command's `switches` with these flags' (mapping lag, loop closing) on top, checked; and
+    /// the vocabulary loaded. What `run`, `bench` and `match` hand the system.
+    pub fn resolve(&self, sensor: SensorKind, switches: Switches) -> Result<Resolved> {
+        let switches = Switches {
+            mapping_lag: self.mapping_lag,
+            no_loop_closing: self.no_loop_closing,
+            ..switches
+        };
+        let config = system_config(sensor, self.config.as_deref(), switches)?;
+        let vocabulary = crate::vocab_file::choose(self.vocabulary_flag()?.as_deref())?;
+        Ok(Resolved { config, vocabulary })
+    }
+}
+
+/// A run's settings as [`SystemArgs::resolve`] gives them.
+pub struct Resolved {
+    /// The SLAM configuration.
+    pub config: Config,
+    /// The place-recognition vocabulary and how it is named in a run's records.
+    pub vocabulary: VocabularyChoice,
 }
 
 #[cfg(test)]
@@ -101,15 +139,22 @@ mod tests {
     }
 
     #[test]
-    fn system_flags_become_the_lag_and_loop_switches_and_nothing_else() {
+    fn system_flags_set_the_lag_and_loop_closing_over_the_commands_switches_and_nothing_else() {
         let l = Line::try_parse_from(["x", "--mapping-lag", "3", "--no-loop-closing"]).unwrap();
-        let s = l.system.switches();
-        assert_eq!(s.mapping_lag, Some(3));
-        assert!(s.no_loop_closing);
-        assert!(!s.mcor && !s.avc && !s.rc && s.mcor_cluster.is_none());
-        let none = Line::try_parse_from(["x"]).unwrap().system.switches();
-        assert_eq!(none.mapping_lag, None);
-        assert!(!none.no_loop_closing);
+        let with_mcor = Switches {
+            mcor: true,
+            ..Switches::default()
+        };
+        let r = l.system.resolve(SensorKind::Rgbd, with_mcor).unwrap();
+        assert_eq!(r.config.mapping_lag, 3);
+        assert!(!r.config.loop_closing.enabled);
+        assert!(r.config.mcor.is_some() && r.config.avc.is_none() && r.config.rc.is_none());
+        let none = Line::try_parse_from(["x"]).unwrap().system;
+        let r = none
+            .resolve(SensorKind::Stereo, Switches::default())
+            .unwrap();
+        assert_eq!(r.config, Config::stereo());
+        assert!(r.vocabulary.identity.starts_with("built-in"));
     }
 
     #[test]
