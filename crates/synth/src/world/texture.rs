@@ -133,229 +133,274 @@ impl Texture {
         };
         let (wm, hm) = (w as f64 / scale, h as f64 / scale);
         match style {
-            Style::Carpet => {
-                t.patchwork(rng, 0.0, 0.0, wm, hm, 0.08, 0.6);
-                t.scatter(
-                    rng,
-                    wm,
-                    hm,
-                    &[(0.2, 0.3), (0.1, 0.25), (0.05, 0.15)],
-                    0.0,
-                    texel_m,
-                );
-            }
-            Style::Poster => {
-                t.patchwork(rng, 0.0, 0.0, wm, hm, 0.3, 1.2);
-                let scales = [
-                    (0.45, 0.4),
-                    (0.22, 0.35),
-                    (0.11, 0.3),
-                    (0.055, 0.2),
-                    (0.028, 0.1),
-                ];
-                t.scatter(rng, wm, hm, &scales, 0.15, texel_m);
-            }
-            Style::Desk => {
-                t.streaks(rng, wm, hm);
-                let scales = [(0.2, 0.3), (0.1, 0.25), (0.05, 0.2), (0.025, 0.1)];
-                t.scatter(rng, wm, hm, &scales, 0.25, texel_m);
-            }
-            Style::OfficeWall => {
-                let paint = [rng.random_range(150.0..215.0), rng.random_range(0.0..0.25)];
-                t.shaded_patchwork(rng, wm, hm, (0.6, 2.0), paint, 6.0);
-                // Posters and pictures covering ~12 % of the surface, each framed.
-                let n = (0.12 * wm * hm / 0.3).ceil() as usize;
-                for _ in 0..n {
-                    let pw = rng.random_range(0.25..0.8f64).min(0.9 * wm);
-                    let ph = rng.random_range(0.25..0.8f64).min(0.9 * hm);
-                    let x0 = rng.random_range(0.0..(wm - pw).max(1e-3));
-                    let y0 = rng.random_range(0.0..(hm - ph).max(1e-3));
-                    let frame = random_colour(rng);
-                    t.fill_rect(x0 - 0.01, y0 - 0.01, x0 + pw + 0.01, y0 + ph + 0.01, frame);
-                    let poster = Texture::collage(rng, pw, ph, texel_m, Style::Poster);
-                    t.blit(&poster, x0, y0);
-                }
-                // A few notes.
-                t.scatter(rng, wm, hm, &[(0.2, 0.01)], 1.0, texel_m);
-            }
-            Style::OfficeFloor => {
-                let grey = [rng.random_range(70.0..130.0), rng.random_range(0.0..0.2)];
-                t.shaded_patchwork(rng, wm, hm, (0.5, 0.5), grey, 7.0);
-            }
-            Style::Cloth => {
-                let dye = [rng.random_range(40.0..200.0), rng.random_range(0.1..0.6)];
-                t.shaded_patchwork(rng, wm, hm, (0.04, 0.15), dye, 22.0);
-                if rng.random_bool(0.4) {
-                    // Stripes of a second colour.
-                    let c = random_colour(rng);
-                    let (w, gap) = (rng.random_range(0.01..0.03), rng.random_range(0.02..0.06));
-                    let mut y = 0.0;
-                    while y < hm {
-                        t.fill_rect(0.0, y, wm, y + w, c);
-                        y += w + gap;
-                    }
-                }
-                t.scatter(rng, wm, hm, &[(0.06, 0.04), (0.03, 0.03)], 0.0, texel_m);
-            }
-            Style::Head => {
-                let skin = [rng.random_range(120.0..200.0), rng.random_range(0.2..0.4)];
-                t.shaded_patchwork(rng, wm, hm, (0.03, 0.08), skin, 8.0);
-                let l = rng.random_range(20.0..90.0);
-                let hair = [l as u8, (l * 0.85) as u8, (l * 0.7) as u8];
-                let front = 0.5 * wm;
-                // Hair: the top third all round, down to the neck at the back.
-                t.fill_rect(0.0, 0.62 * hm, wm, hm, hair);
-                t.fill_rect(0.0, 0.0, 0.22 * wm, hm, hair);
-                t.fill_rect(0.78 * wm, 0.0, wm, hm, hair);
-                let dark = [40, 30, 30];
-                t.fill_disc(front - 0.03, 0.5 * hm, 0.008, dark);
-                t.fill_disc(front + 0.03, 0.5 * hm, 0.008, dark);
-                t.fill_rect(
-                    front - 0.025,
-                    0.22 * hm,
-                    front + 0.025,
-                    0.25 * hm,
-                    [120, 50, 50],
-                );
-            }
-            Style::Mat => {
-                let grey = [rng.random_range(110.0..170.0), rng.random_range(0.0..0.15)];
-                t.shaded_patchwork(rng, wm, hm, (0.3, 1.0), grey, 4.0);
-                let seam = rng.random_range(0.25..0.5);
-                let dark = (grey[0] - rng.random_range(18.0..30.0)) as u8;
-                let mut y = seam;
-                while y < hm {
-                    t.fill_rect(0.0, y - 0.008, wm, y + 0.008, [dark; 3]);
-                    y += seam;
-                }
-                // Scuffs.
-                t.scatter(rng, wm, hm, &[(0.04, 0.004)], 0.0, texel_m);
-            }
-            Style::Curtain => {
-                let base: f64 = rng.random_range(185.0..235.0);
-                let mut x = 0.0;
-                while x < wm {
-                    let w = rng.random_range(0.08..0.25);
-                    let l = (base + rng.random_range(-9.0..9.0)).clamp(0.0, 255.0) as u8;
-                    t.fill_rect(x, 0.0, x + w, hm, [l; 3]);
-                    x += w;
-                }
-            }
-            Style::MarkerStrip => {
-                let black = rng.random_range(15..35);
-                t.fill_rect(0.0, 0.0, wm, hm, [black; 3]);
-                let n = (wm * hm / 0.0025).ceil() as usize;
-                for _ in 0..n {
-                    let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
-                    let (hw, hh) = (rng.random_range(0.006..0.02), rng.random_range(0.003..0.01));
-                    let a = rng.random_range(0.0..std::f64::consts::PI);
-                    let (ca, sa) = (a.cos(), a.sin());
-                    let p = |x: f64, y: f64| (cx + ca * x - sa * y, cy + sa * x + ca * y);
-                    let white = rng.random_range(200..=250);
-                    t.fill_polygon(
-                        &[p(-hw, -hh), p(hw, -hh), p(hw, hh), p(-hw, hh)],
-                        [white; 3],
-                    );
-                }
-            }
-            Style::Checker => {
-                let sq = 0.05;
-                t.fill_rect(0.0, 0.0, wm, hm, [235; 3]);
-                let (nx, ny) = ((wm / sq) as usize, (hm / sq) as usize);
-                for j in 1..ny.saturating_sub(1) {
-                    for i in 1..nx.saturating_sub(1) {
-                        if (i + j) % 2 == 0 {
-                            let (x, y) = (i as f64 * sq, j as f64 * sq);
-                            t.fill_rect(x, y, x + sq, y + sq, [20; 3]);
-                        }
-                    }
-                }
-            }
-            Style::Concrete => {
-                let grey = [rng.random_range(95.0..150.0), rng.random_range(0.0..0.12)];
-                t.shaded_patchwork(rng, wm, hm, (0.8, 3.0), grey, 9.0);
-                // Stains and cracks, then a few painted lines and signs.
-                t.scatter(rng, wm, hm, &[(0.3, 0.02), (0.08, 0.01)], 0.0, texel_m);
-                let lines = (wm * hm / 20.0).ceil() as usize;
-                for _ in 0..lines {
-                    let paint = [230, rng.random_range(170..220), rng.random_range(0..60)];
-                    let y = rng.random_range(0.0..hm);
-                    t.fill_rect(0.0, y, wm, y + 0.08, paint);
-                }
-                let signs = (wm * hm / 15.0).ceil() as usize;
-                for _ in 0..signs {
-                    let (pw, ph) = (rng.random_range(0.2..0.6), rng.random_range(0.2..0.6));
-                    let x0 = rng.random_range(0.0..(wm - pw).max(1e-3));
-                    let y0 = rng.random_range(0.0..(hm - ph).max(1e-3));
-                    let sign = Texture::collage(rng, pw, ph, texel_m, Style::Poster);
-                    t.blit(&sign, x0, y0);
-                }
-            }
-            Style::Machine => {
-                let paint = [rng.random_range(60.0..190.0), rng.random_range(0.1..0.6)];
-                t.shaded_patchwork(rng, wm, hm, (0.2, 0.8), paint, 25.0);
-                // Labels, vents, bolts and cables.
-                t.scatter(
-                    rng,
-                    wm,
-                    hm,
-                    &[(0.12, 0.06), (0.04, 0.05), (0.015, 0.03)],
-                    0.3,
-                    texel_m,
-                );
-            }
-            Style::Foliage => {
-                let mut tiles = Vec::new();
-                split_tiles(rng, 0.0, 0.0, wm, hm, 0.02, 0.08, &mut |_, x, y, w, h| {
-                    tiles.push((x, y, w, h))
-                });
-                for (x, y, w, h) in tiles {
-                    let g: f64 = rng.random_range(50.0..190.0);
-                    let c = [(g * 0.45) as u8, g as u8, (g * 0.3) as u8];
-                    t.fill_rect(x, y, x + w, y + h, c);
-                }
-                // Veins: pale lines across, then spots.
-                let mut y = rng.random_range(0.0..0.03);
-                while y < hm {
-                    let l: f64 = rng.random_range(170.0..230.0);
-                    let c = [(l * 0.75) as u8, l as u8, (l * 0.5) as u8];
-                    t.fill_rect(0.0, y, wm, y + 0.003, c);
-                    y += rng.random_range(0.015..0.04);
-                }
-                let spots = (wm * hm / 0.004).ceil() as usize;
-                for _ in 0..spots {
-                    let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
-                    let c = if rng.random_bool(0.5) {
-                        [110, 80, 40]
-                    } else {
-                        [210, 200, 90]
-                    };
-                    t.fill_disc(cx, cy, rng.random_range(0.002..0.006), c);
-                }
-            }
-            Style::Fur => {
-                let l: f64 = rng.random_range(90.0..170.0);
-                let mut tiles = Vec::new();
-                split_tiles(rng, 0.0, 0.0, wm, hm, 0.008, 0.03, &mut |_, x, y, w, h| {
-                    tiles.push((x, y, w, h))
-                });
-                for (x, y, w, h) in tiles {
-                    let k = l + rng.random_range(-30.0..30.0);
-                    let c = [(k * 1.1).min(255.0) as u8, (k * 0.8) as u8, (k * 0.5) as u8];
-                    t.fill_rect(x, y, x + w, y + h, c);
-                }
-                let flecks = (wm * hm / 0.0015).ceil() as usize;
-                for _ in 0..flecks {
-                    let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
-                    let k = l * rng.random_range(0.3..0.6);
-                    let c = [(k * 1.1) as u8, (k * 0.8) as u8, (k * 0.5) as u8];
-                    t.fill_disc(cx, cy, rng.random_range(0.002..0.005), c);
-                }
-                // Stitched patches (paws, a tummy), seams in dark thread.
-                t.scatter(rng, wm, hm, &[(0.05, 0.05)], 0.0, texel_m);
-            }
+            Style::Carpet => t.paint_carpet(rng, wm, hm, texel_m),
+            Style::Poster => t.paint_poster(rng, wm, hm, texel_m),
+            Style::Desk => t.paint_desk(rng, wm, hm, texel_m),
+            Style::OfficeWall => t.paint_office_wall(rng, wm, hm, texel_m),
+            Style::OfficeFloor => t.paint_office_floor(rng, wm, hm),
+            Style::Cloth => t.paint_cloth(rng, wm, hm, texel_m),
+            Style::Head => t.paint_head(rng, wm, hm),
+            Style::Mat => t.paint_mat(rng, wm, hm, texel_m),
+            Style::Curtain => t.paint_curtain(rng, wm, hm),
+            Style::MarkerStrip => t.paint_marker_strip(rng, wm, hm),
+            Style::Checker => t.paint_checker(rng, wm, hm),
+            Style::Concrete => t.paint_concrete(rng, wm, hm, texel_m),
+            Style::Machine => t.paint_machine(rng, wm, hm, texel_m),
+            Style::Foliage => t.paint_foliage(rng, wm, hm),
+            Style::Fur => t.paint_fur(rng, wm, hm, texel_m),
         }
         t
+    }
+
+    /// Paints [`Style::Carpet`]: a patchwork of tiles, shapes scattered at three scales.
+    fn paint_carpet(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        self.patchwork(rng, 0.0, 0.0, wm, hm, 0.08, 0.6);
+        self.scatter(
+            rng,
+            wm,
+            hm,
+            &[(0.2, 0.3), (0.1, 0.25), (0.05, 0.15)],
+            0.0,
+            texel_m,
+        );
+    }
+
+    /// Paints [`Style::Poster`]: a coarse patchwork, shapes and text scattered at five scales.
+    fn paint_poster(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        self.patchwork(rng, 0.0, 0.0, wm, hm, 0.3, 1.2);
+        let scales = [
+            (0.45, 0.4),
+            (0.22, 0.35),
+            (0.11, 0.3),
+            (0.055, 0.2),
+            (0.028, 0.1),
+        ];
+        self.scatter(rng, wm, hm, &scales, 0.15, texel_m);
+    }
+
+    /// Paints [`Style::Desk`]: wood-like streaks, papers and text on top.
+    fn paint_desk(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        self.streaks(rng, wm, hm);
+        let scales = [(0.2, 0.3), (0.1, 0.25), (0.05, 0.2), (0.025, 0.1)];
+        self.scatter(rng, wm, hm, &scales, 0.25, texel_m);
+    }
+
+    /// Paints [`Style::OfficeWall`]: shaded paint, framed posters over about 12 % of it, notes.
+    fn paint_office_wall(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        let paint = [rng.random_range(150.0..215.0), rng.random_range(0.0..0.25)];
+        self.shaded_patchwork(rng, wm, hm, (0.6, 2.0), paint, 6.0);
+        // Posters and pictures covering ~12 % of the surface, each framed.
+        let n = (0.12 * wm * hm / 0.3).ceil() as usize;
+        for _ in 0..n {
+            let pw = rng.random_range(0.25..0.8f64).min(0.9 * wm);
+            let ph = rng.random_range(0.25..0.8f64).min(0.9 * hm);
+            let x0 = rng.random_range(0.0..(wm - pw).max(1e-3));
+            let y0 = rng.random_range(0.0..(hm - ph).max(1e-3));
+            let frame = random_colour(rng);
+            self.fill_rect(x0 - 0.01, y0 - 0.01, x0 + pw + 0.01, y0 + ph + 0.01, frame);
+            let poster = Texture::collage(rng, pw, ph, texel_m, Style::Poster);
+            self.blit(&poster, x0, y0);
+        }
+        // A few notes.
+        self.scatter(rng, wm, hm, &[(0.2, 0.01)], 1.0, texel_m);
+    }
+
+    /// Paints [`Style::OfficeFloor`]: large low-contrast tiles.
+    fn paint_office_floor(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64) {
+        let grey = [rng.random_range(70.0..130.0), rng.random_range(0.0..0.2)];
+        self.shaded_patchwork(rng, wm, hm, (0.5, 0.5), grey, 7.0);
+    }
+
+    /// Paints [`Style::Cloth`]: dyed shaded folds, stripes on some, a print.
+    fn paint_cloth(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        let dye = [rng.random_range(40.0..200.0), rng.random_range(0.1..0.6)];
+        self.shaded_patchwork(rng, wm, hm, (0.04, 0.15), dye, 22.0);
+        if rng.random_bool(0.4) {
+            // Stripes of a second colour.
+            let c = random_colour(rng);
+            let (w, gap) = (rng.random_range(0.01..0.03), rng.random_range(0.02..0.06));
+            let mut y = 0.0;
+            while y < hm {
+                self.fill_rect(0.0, y, wm, y + w, c);
+                y += w + gap;
+            }
+        }
+        self.scatter(rng, wm, hm, &[(0.06, 0.04), (0.03, 0.03)], 0.0, texel_m);
+    }
+
+    /// Paints [`Style::Head`]: skin, hair on top and at the back, eyes and mouth at the front.
+    fn paint_head(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64) {
+        let skin = [rng.random_range(120.0..200.0), rng.random_range(0.2..0.4)];
+        self.shaded_patchwork(rng, wm, hm, (0.03, 0.08), skin, 8.0);
+        let l = rng.random_range(20.0..90.0);
+        let hair = [l as u8, (l * 0.85) as u8, (l * 0.7) as u8];
+        let front = 0.5 * wm;
+        // Hair: the top third all round, down to the neck at the back.
+        self.fill_rect(0.0, 0.62 * hm, wm, hm, hair);
+        self.fill_rect(0.0, 0.0, 0.22 * wm, hm, hair);
+        self.fill_rect(0.78 * wm, 0.0, wm, hm, hair);
+        let dark = [40, 30, 30];
+        self.fill_disc(front - 0.03, 0.5 * hm, 0.008, dark);
+        self.fill_disc(front + 0.03, 0.5 * hm, 0.008, dark);
+        self.fill_rect(
+            front - 0.025,
+            0.22 * hm,
+            front + 0.025,
+            0.25 * hm,
+            [120, 50, 50],
+        );
+    }
+
+    /// Paints [`Style::Mat`]: grey shaded fabric, darker seams at a regular spacing, scuffs.
+    fn paint_mat(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        let grey = [rng.random_range(110.0..170.0), rng.random_range(0.0..0.15)];
+        self.shaded_patchwork(rng, wm, hm, (0.3, 1.0), grey, 4.0);
+        let seam = rng.random_range(0.25..0.5);
+        let dark = (grey[0] - rng.random_range(18.0..30.0)) as u8;
+        let mut y = seam;
+        while y < hm {
+            self.fill_rect(0.0, y - 0.008, wm, y + 0.008, [dark; 3]);
+            y += seam;
+        }
+        // Scuffs.
+        self.scatter(rng, wm, hm, &[(0.04, 0.004)], 0.0, texel_m);
+    }
+
+    /// Paints [`Style::Curtain`]: light vertical folds.
+    fn paint_curtain(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64) {
+        let base: f64 = rng.random_range(185.0..235.0);
+        let mut x = 0.0;
+        while x < wm {
+            let w = rng.random_range(0.08..0.25);
+            let l = (base + rng.random_range(-9.0..9.0)).clamp(0.0, 255.0) as u8;
+            self.fill_rect(x, 0.0, x + w, hm, [l; 3]);
+            x += w;
+        }
+    }
+
+    /// Paints [`Style::MarkerStrip`]: black tape with rotated white chips.
+    fn paint_marker_strip(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64) {
+        let black = rng.random_range(15..35);
+        self.fill_rect(0.0, 0.0, wm, hm, [black; 3]);
+        let n = (wm * hm / 0.0025).ceil() as usize;
+        for _ in 0..n {
+            let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
+            let (hw, hh) = (rng.random_range(0.006..0.02), rng.random_range(0.003..0.01));
+            let a = rng.random_range(0.0..std::f64::consts::PI);
+            let (ca, sa) = (a.cos(), a.sin());
+            let p = |x: f64, y: f64| (cx + ca * x - sa * y, cy + sa * x + ca * y);
+            let white = rng.random_range(200..=250);
+            self.fill_polygon(
+                &[p(-hw, -hh), p(hw, -hh), p(hw, hh), p(-hw, hh)],
+                [white; 3],
+            );
+        }
+    }
+
+    /// Paints [`Style::Checker`]: 5 cm squares inside a white margin.
+    fn paint_checker(&mut self, _rng: &mut ChaCha8Rng, wm: f64, hm: f64) {
+        let sq = 0.05;
+        self.fill_rect(0.0, 0.0, wm, hm, [235; 3]);
+        let (nx, ny) = ((wm / sq) as usize, (hm / sq) as usize);
+        for j in 1..ny.saturating_sub(1) {
+            for i in 1..nx.saturating_sub(1) {
+                if (i + j) % 2 == 0 {
+                    let (x, y) = (i as f64 * sq, j as f64 * sq);
+                    self.fill_rect(x, y, x + sq, y + sq, [20; 3]);
+                }
+            }
+        }
+    }
+
+    /// Paints [`Style::Concrete`]: grey slabs, stains and cracks, painted lines and signs.
+    fn paint_concrete(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        let grey = [rng.random_range(95.0..150.0), rng.random_range(0.0..0.12)];
+        self.shaded_patchwork(rng, wm, hm, (0.8, 3.0), grey, 9.0);
+        // Stains and cracks, then a few painted lines and signs.
+        self.scatter(rng, wm, hm, &[(0.3, 0.02), (0.08, 0.01)], 0.0, texel_m);
+        let lines = (wm * hm / 20.0).ceil() as usize;
+        for _ in 0..lines {
+            let paint = [230, rng.random_range(170..220), rng.random_range(0..60)];
+            let y = rng.random_range(0.0..hm);
+            self.fill_rect(0.0, y, wm, y + 0.08, paint);
+        }
+        let signs = (wm * hm / 15.0).ceil() as usize;
+        for _ in 0..signs {
+            let (pw, ph) = (rng.random_range(0.2..0.6), rng.random_range(0.2..0.6));
+            let x0 = rng.random_range(0.0..(wm - pw).max(1e-3));
+            let y0 = rng.random_range(0.0..(hm - ph).max(1e-3));
+            let sign = Texture::collage(rng, pw, ph, texel_m, Style::Poster);
+            self.blit(&sign, x0, y0);
+        }
+    }
+
+    /// Paints [`Style::Machine`]: painted panels, labels, vents and bolts.
+    fn paint_machine(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        let paint = [rng.random_range(60.0..190.0), rng.random_range(0.1..0.6)];
+        self.shaded_patchwork(rng, wm, hm, (0.2, 0.8), paint, 25.0);
+        // Labels, vents, bolts and cables.
+        self.scatter(
+            rng,
+            wm,
+            hm,
+            &[(0.12, 0.06), (0.04, 0.05), (0.015, 0.03)],
+            0.3,
+            texel_m,
+        );
+    }
+
+    /// Paints [`Style::Foliage`]: green patches, paler veins, brown or yellow spots.
+    fn paint_foliage(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64) {
+        let mut tiles = Vec::new();
+        split_tiles(rng, 0.0, 0.0, wm, hm, 0.02, 0.08, &mut |_, x, y, w, h| {
+            tiles.push((x, y, w, h))
+        });
+        for (x, y, w, h) in tiles {
+            let g: f64 = rng.random_range(50.0..190.0);
+            let c = [(g * 0.45) as u8, g as u8, (g * 0.3) as u8];
+            self.fill_rect(x, y, x + w, y + h, c);
+        }
+        // Veins: pale lines across, then spots.
+        let mut y = rng.random_range(0.0..0.03);
+        while y < hm {
+            let l: f64 = rng.random_range(170.0..230.0);
+            let c = [(l * 0.75) as u8, l as u8, (l * 0.5) as u8];
+            self.fill_rect(0.0, y, wm, y + 0.003, c);
+            y += rng.random_range(0.015..0.04);
+        }
+        let spots = (wm * hm / 0.004).ceil() as usize;
+        for _ in 0..spots {
+            let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
+            let c = if rng.random_bool(0.5) {
+                [110, 80, 40]
+            } else {
+                [210, 200, 90]
+            };
+            self.fill_disc(cx, cy, rng.random_range(0.002..0.006), c);
+        }
+    }
+
+    /// Paints [`Style::Fur`]: shaded tufts, darker flecks, stitched patches.
+    fn paint_fur(&mut self, rng: &mut ChaCha8Rng, wm: f64, hm: f64, texel_m: f64) {
+        let l: f64 = rng.random_range(90.0..170.0);
+        let mut tiles = Vec::new();
+        split_tiles(rng, 0.0, 0.0, wm, hm, 0.008, 0.03, &mut |_, x, y, w, h| {
+            tiles.push((x, y, w, h))
+        });
+        for (x, y, w, h) in tiles {
+            let k = l + rng.random_range(-30.0..30.0);
+            let c = [(k * 1.1).min(255.0) as u8, (k * 0.8) as u8, (k * 0.5) as u8];
+            self.fill_rect(x, y, x + w, y + h, c);
+        }
+        let flecks = (wm * hm / 0.0015).ceil() as usize;
+        for _ in 0..flecks {
+            let (cx, cy) = (rng.random_range(0.0..wm), rng.random_range(0.0..hm));
+            let k = l * rng.random_range(0.3..0.6);
+            let c = [(k * 1.1) as u8, (k * 0.8) as u8, (k * 0.5) as u8];
+            self.fill_disc(cx, cy, rng.random_range(0.002..0.005), c);
+        }
+        // Stitched patches (paws, a tummy), seams in dark thread.
+        self.scatter(rng, wm, hm, &[(0.05, 0.05)], 0.0, texel_m);
     }
 
     /// Tiles between `tile.0` and `tile.1` metres of one paint `[luminance, saturation]`,
