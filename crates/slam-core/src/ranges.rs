@@ -114,6 +114,16 @@ impl Config {
             prefix: "orb",
             first: None,
         };
+        self.check_orb(&mut c);
+        self.check_tracking(&mut c);
+        self.check_mapping(&mut c);
+        self.check_loop_closing(&mut c);
+        self.check_techniques(&mut c);
+        c.first.map_or(Ok(()), Err)
+    }
+
+    /// The ORB extractor's values.
+    fn check_orb(&self, c: &mut Checker) {
         let o = &self.orb;
         c.count("n_features", o.n_features as u64, 1, MAX_FEATURES);
         if o.n_features <= self.init_min_keypoints {
@@ -139,7 +149,10 @@ impl Config {
             1,
             u64::from(o.ini_th_fast.max(1)),
         );
+    }
 
+    /// Tracking's and the keyframe decision's values.
+    fn check_tracking(&self, c: &mut Checker) {
         c.section("tracking");
         let t = &self.tracking;
         for (k, v) in [
@@ -168,7 +181,10 @@ impl Config {
             1.0,
         );
         c.within("ref_ratio_weak", k.ref_ratio_weak, 0.0, 1.0);
+    }
 
+    /// Local mapping's and relocalization's values.
+    fn check_mapping(&self, c: &mut Checker) {
         c.section("mapping");
         let m = &self.mapping;
         c.within("min_found_ratio", m.min_found_ratio, 0.0, 1.0);
@@ -192,7 +208,10 @@ impl Config {
         c.above("ransac_chi2", r.ransac_chi2, 0.0);
         c.count("score_sample", r.score_sample as u64, 1, MAX_FEATURES);
         c.count("max_candidates", r.max_candidates as u64, 1, MAX_WORK_COUNT);
+    }
 
+    /// Loop closing's values.
+    fn check_loop_closing(&self, c: &mut Checker) {
         c.section("loop_closing");
         let l = &self.loop_closing;
         c.count("consistency", l.consistency as u64, 1, MAX_WORK_COUNT);
@@ -219,7 +238,10 @@ impl Config {
             0,
             MAX_WORK_COUNT,
         );
+    }
 
+    /// The techniques' values (MC-OR, AVC, the RGB-D baseline, rigid consensus), when on.
+    fn check_techniques(&self, c: &mut Checker) {
         if let Some(m) = &self.mcor {
             c.section("mcor");
             c.above("tau_mf", m.tau_mf, 0.0);
@@ -278,7 +300,6 @@ impl Config {
             c.within("nested_share", rc.nested_share, 0.0, 1.0);
             c.within("nested_evidence", rc.nested_evidence, 0.0, 1000.0);
         }
-        c.first.map_or(Ok(()), Err)
     }
 }
 
