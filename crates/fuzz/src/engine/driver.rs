@@ -474,25 +474,7 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
     let started_ms = Arc::new(AtomicU64::new(0));
     let done = Arc::new(AtomicBool::new(false));
     let epoch = Instant::now();
-    let watchdog = {
-        let (started_ms, done, hang) = (started_ms.clone(), done.clone(), limits.hang);
-        let name = target.name;
-        std::thread::spawn(move || {
-            while !done.load(Ordering::Relaxed) {
-                std::thread::sleep(Duration::from_millis(50));
-                let s = started_ms.load(Ordering::Relaxed);
-                let now = epoch.elapsed().as_millis() as u64;
-                if s > 0 && now.saturating_sub(s) > hang.as_millis() as u64 {
-                    let at = save_current("hang");
-                    eprintln!(
-                        "fuzz: {name}: an input has run for more than {} s (a hang); saved: {at}",
-                        hang.as_secs_f64()
-                    );
-                    std::process::exit(70);
-                }
-            }
-        })
-    };
+    let watchdog = spawn_watchdog(target.name, limits.hang, &started_ms, &done, epoch);
 
     let mut rng = Rng::new(seed);
     let mut report = Report {
@@ -501,7 +483,6 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
         ..Report::default()
     };
     let t0 = Instant::now();
-    const KEEP: usize = 3;
     loop {
         if limits.max_inputs.is_some_and(|n| report.inputs >= n)
             || limits.max_time.is_some_and(|t| t0.elapsed() >= t)
@@ -529,78 +510,16 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
         started_ms.store(0, Ordering::Relaxed);
         let peak = (alloc::peak() - base).max(0) as u64;
 
-        report.peak_bytes = report.peak_bytes.max(peak);
-        match result {
-            Ok(Ok(())) => report.accepted += 1,
-            Ok(Err(msg)) => {
-                report.refused += 1;
-                if !names_its_file(target, &msg) {
-                    report.n_nameless += 1;
-                    if report.nameless.len() < KEEP {
-                        report.nameless.push(Finding {
-                            what: format!("error without the file name: {msg}"),
-                            input: input.clone(),
-                        });
-                    }
-                }
-            }
-            Err(_) => {
-                report.n_panics += 1;
-                let msg = lock(&LAST_PANIC).take().unwrap_or_default();
-                save(
-                    &limits.out_dir,
-                    target.name,
-                    "panic",
-                    report.n_panics,
-                    &input,
-                );
-                if report.panics.len() < KEEP {
-                    let small = shrink(&target.read, &input, 3000);
-                    report.panics.push(Finding {
-                        what: msg,
-                        input: small,
-                    });
-                }
-            }
-        }
-        let allowed = limits.allowed_time(input.len());
-        let took = fastest(target, &input, took, allowed);
-        report.slowest = report.slowest.max(took);
-        if took > allowed {
-            report.n_slow += 1;
-            save(&limits.out_dir, target.name, "slow", report.n_slow, &input);
-            if report.slow.len() < KEEP {
-                report.slow.push(Finding {
-                    what: format!(
-                        "{:.1} ms for {} bytes (allowed {:.1} ms)",
-                        took.as_secs_f64() * 1e3,
-                        input.len(),
-                        allowed.as_secs_f64() * 1e3
-                    ),
-                    input: input.clone(),
-                });
-            }
-        }
-        let bound = limits.allowed_bytes(target, input.len());
-        if counted && peak as f64 > bound {
-            report.n_alloc += 1;
-            save(
-                &limits.out_dir,
-                target.name,
-                "alloc",
-                report.n_alloc,
-                &input,
-            );
-            if report.alloc.len() < KEEP {
-                report.alloc.push(Finding {
-                    what: format!(
-                        "{peak} bytes live for a {}-byte input (allowed {bound:.0})",
-                        input.len()
-                    ),
-                    input: input.clone(),
-                });
-            }
-        }
+        record(
+            &mut report,
+            target,
+            limits,
+            counted,
+            &input,
+            result,
+            took,
+            peak,
+        );
     }
     report.elapsed = t0.elapsed();
     done.store(true, Ordering::Relaxed);
@@ -612,6 +531,116 @@ pub fn run(target: &Target, seed: u64, limits: &Limits) -> Report {
     }
     *lock(&CURRENT) = None;
     report
+}
+
+/// Records what one input did: accepted, refused (with or without its file's name), panicked,
+/// slow, or over its allocation bound; the findings saved and the first few kept.
+#[allow(clippy::too_many_arguments)]
+fn record(
+    report: &mut Report,
+    target: &Target,
+    limits: &Limits,
+    counted: bool,
+    input: &[u8],
+    result: std::thread::Result<Result<(), String>>,
+    took: Duration,
+    peak: u64,
+) {
+    const KEEP: usize = 3;
+    report.peak_bytes = report.peak_bytes.max(peak);
+    match result {
+        Ok(Ok(())) => report.accepted += 1,
+        Ok(Err(msg)) => {
+            report.refused += 1;
+            if !names_its_file(target, &msg) {
+                report.n_nameless += 1;
+                if report.nameless.len() < KEEP {
+                    report.nameless.push(Finding {
+                        what: format!("error without the file name: {msg}"),
+                        input: input.to_vec(),
+                    });
+                }
+            }
+        }
+        Err(_) => {
+            report.n_panics += 1;
+            let msg = lock(&LAST_PANIC).take().unwrap_or_default();
+            save(
+                &limits.out_dir,
+                target.name,
+                "panic",
+                report.n_panics,
+                input,
+            );
+            if report.panics.len() < KEEP {
+                let small = shrink(&target.read, input, 3000);
+                report.panics.push(Finding {
+                    what: msg,
+                    input: small,
+                });
+            }
+        }
+    }
+    let allowed = limits.allowed_time(input.len());
+    let took = fastest(target, input, took, allowed);
+    report.slowest = report.slowest.max(took);
+    if took > allowed {
+        report.n_slow += 1;
+        save(&limits.out_dir, target.name, "slow", report.n_slow, input);
+        if report.slow.len() < KEEP {
+            report.slow.push(Finding {
+                what: format!(
+                    "{:.1} ms for {} bytes (allowed {:.1} ms)",
+                    took.as_secs_f64() * 1e3,
+                    input.len(),
+                    allowed.as_secs_f64() * 1e3
+                ),
+                input: input.to_vec(),
+            });
+        }
+    }
+    let bound = limits.allowed_bytes(target, input.len());
+    if counted && peak as f64 > bound {
+        report.n_alloc += 1;
+        save(&limits.out_dir, target.name, "alloc", report.n_alloc, input);
+        if report.alloc.len() < KEEP {
+            report.alloc.push(Finding {
+                what: format!(
+                    "{peak} bytes live for a {}-byte input (allowed {bound:.0})",
+                    input.len()
+                ),
+                input: input.to_vec(),
+            });
+        }
+    }
+}
+
+/// Starts the thread that ends the process when an input has run past `hang` (`started_ms`:
+/// when the current input started, in ms since `epoch`, 0 between inputs), saving the input
+/// first; it stops when `done` is set.
+fn spawn_watchdog(
+    name: &'static str,
+    hang: Duration,
+    started_ms: &Arc<AtomicU64>,
+    done: &Arc<AtomicBool>,
+    epoch: Instant,
+) -> std::thread::JoinHandle<()> {
+    let (started_ms, done) = (started_ms.clone(), done.clone());
+    std::thread::spawn(move || {
+        while !done.load(Ordering::Relaxed) {
+            std::thread::sleep(Duration::from_millis(50));
+            let s = started_ms.load(Ordering::Relaxed);
+            let now = epoch.elapsed().as_millis() as u64;
+            if s > 0 && now.saturating_sub(s) > hang.as_millis() as u64 {
+                let at = save_current("hang");
+                eprintln!(
+                    "fuzz: {name}: an input has run for more than {} s (a hang); saved: {at}",
+                    hang.as_secs_f64()
+                );
+                std::process::exit(70);
+            }
+        }
+    })
 }
 
 /// Appends one tab-separated line per report to the tally file `path` (with a header when the
