@@ -19,6 +19,7 @@ use crate::sensor::depth::sensor_depth;
 use crate::sensor::imaging::{
     exposed_gray8, exposed_rgb8, noisy_gray8, noisy_rgb8, rgb_to_gray, ExposureSettings, Photometry,
 };
+use crate::sensor::render::RenderOutput;
 use crate::sensor::render::{Exposed, Shading, Supersampling, View};
 use crate::spec::SynthConfig;
 use crate::world::layout::{layout, SceneSpec, SightLine};
@@ -428,6 +429,51 @@ impl Generator {
         .render()
     }
 
+    /// Frame `index`'s measured depth (at time `t`): the depth sensor's model over the rendered
+    /// `left` view, or over a view rendered at the depth's lag when the model has one.
+    fn measured_depth(
+        &self,
+        index: usize,
+        t: f64,
+        left: &RenderOutput,
+        occluded: bool,
+    ) -> Vec<f32> {
+        let cam = &self.config.camera;
+        let model = &self.config.depth_noise;
+        match &model.lag {
+            Some(lag) if lag.frames != 0.0 => {
+                let td = t - lag.frames / cam.fps;
+                let placed_d = self.scene.place(td);
+                let lagged = View {
+                    scene: &self.scene,
+                    placed: &placed_d,
+                    camera: cam,
+                    pose_wc: self.pose_at_time(td),
+                    occluded,
+                }
+                .render(None);
+                sensor_depth(
+                    model,
+                    self.config.depth_units_per_metre,
+                    cam,
+                    &lagged.depth,
+                    &lagged.cos_incidence,
+                    self.seed,
+                    index,
+                )
+            }
+            _ => sensor_depth(
+                model,
+                self.config.depth_units_per_metre,
+                cam,
+                &left.depth,
+                &left.cos_incidence,
+                self.seed,
+                index,
+            ),
+        }
+    }
+
     /// Generates frame `index` (deterministic in (config, seed, index)).
     pub fn frame(&self, index: usize) -> SynthFrame {
         let cam = &self.config.camera;
@@ -481,39 +527,7 @@ impl Generator {
                 height: h,
                 data: rgb_to_gray(&rgb),
             };
-            let model = &self.config.depth_noise;
-            let measured = match &model.lag {
-                Some(lag) if lag.frames != 0.0 => {
-                    let td = t - lag.frames / cam.fps;
-                    let placed_d = self.scene.place(td);
-                    let lagged = View {
-                        scene: &self.scene,
-                        placed: &placed_d,
-                        camera: cam,
-                        pose_wc: self.pose_at_time(td),
-                        occluded,
-                    }
-                    .render(None);
-                    sensor_depth(
-                        model,
-                        self.config.depth_units_per_metre,
-                        cam,
-                        &lagged.depth,
-                        &lagged.cos_incidence,
-                        self.seed,
-                        index,
-                    )
-                }
-                _ => sensor_depth(
-                    model,
-                    self.config.depth_units_per_metre,
-                    cam,
-                    &left.depth,
-                    &left.cos_incidence,
-                    self.seed,
-                    index,
-                ),
-            };
+            let measured = self.measured_depth(index, t, &left, occluded);
             SynthFrame {
                 index,
                 timestamp: self.timestamp(index),
