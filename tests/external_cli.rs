@@ -175,7 +175,7 @@ fn failing_programs_are_failed_runs_with_their_reason_and_the_sweep_completes() 
     let out = dir.join("sweep");
     let (cfg_s, out_s) = (cfg.to_str().unwrap(), out.to_str().unwrap());
     let started = std::time::Instant::now();
-    noisefree_ok(&[
+    let swept = noisefree_ok(&[
         "sweep",
         "--seq",
         "kinect",
@@ -196,6 +196,12 @@ fn failing_programs_are_failed_runs_with_their_reason_and_the_sweep_completes() 
     assert!(
         started.elapsed().as_secs() < 25,
         "the timeout ended the sleeper"
+    );
+    // Said even under --quiet: every run failed, and why.
+    let said = String::from_utf8_lossy(&swept.stderr);
+    assert!(
+        said.contains("10 of the folder's 10 runs failed") && said.contains("exit status 1"),
+        "{said}"
     );
     let recs = records(&out);
     assert_eq!(recs.len(), 10);

@@ -218,8 +218,17 @@ pub fn run(args: SweepArgs) -> Result<()> {
         eprintln!("{note}");
     }
     if !args.quiet {
+        // A finished run may be a failed one: say so in the last line too.
+        let failed = records.iter().filter(|r| r.failed).count();
+        let failed = match failed {
+            0 => String::new(),
+            n => format!(
+                " ({n} of the folder's {} runs failed: see above)",
+                records.len()
+            ),
+        };
         eprintln!(
-            "{} runs finished in {:.1} s, {}; records in {}",
+            "{} runs finished in {:.1} s{failed}, {}; records in {}",
             done.cost.runs,
             done.cost.wall_s,
             done.cost.line(),
