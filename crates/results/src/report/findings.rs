@@ -525,11 +525,21 @@ fn readings_findings(
         counted(read.len(), "comparison", "comparisons"),
         lower.len(),
     );
-    let named: Vec<String> = lower
+    // The glance names the largest gain only: a list of every one outgrows a line of the README.
+    let largest = lower
         .iter()
-        .map(|(r, _)| {
+        .map(|(r, _)| r)
+        .min_by(|a, b| {
+            let d = |r: &VersusRow| r.diff_pct.map_or(0.0, |d| d.0);
+            d(a).total_cmp(&d(b))
+        })
+        .map(|r| {
+            let more = match lower.len() - 1 {
+                0 => String::new(),
+                n => format!("; {n} more in the findings"),
+            };
             format!(
-                "`{}` on {} {} ({})",
+                "largest: `{}` on {} {} ({}){more}",
                 r.config,
                 r.sequence,
                 diff_text(r.diff_pct.expect("filtered")),
@@ -537,8 +547,8 @@ fn readings_findings(
                     .file_name()
                     .map_or(String::new(), |f| f.to_string_lossy().into_owned()),
             )
-        })
-        .collect();
+        });
+    let named: Vec<String> = largest.into_iter().collect();
     Some(format!(
         "{}: **{} lower ATE after Holm over the study**{}, {higher} higher",
         counted(read.len(), "comparison", "comparisons"),
@@ -1175,6 +1185,10 @@ mod tests {
             "{glance}"
         );
         assert!(glance.ends_with(", 1 higher"), "{glance}");
+        assert!(
+            glance.contains("(largest: `mcor:verdict=consensus` on twin_fr3_w_static -60.0 %"),
+            "{glance}"
+        );
         // Without reading columns there is nothing to say.
         assert!(
             readings_findings(&mut String::new(), &rows[3..], &catalog, Path::new("r")).is_none()
