@@ -63,7 +63,7 @@ fn the_results_report_agrees_with_the_committed_tables() {
     noisefree_ok(&["report", "--check", "README.md"]);
 }
 
-/// Every committed table is what `noisefree table` makes of its runs today, byte for byte
+/// Every committed table and figure is what `noisefree table` makes of its runs today, byte for byte
 /// (tools/regenerate_check.sh: each folder copied and its tables made again).
 #[test]
 fn every_committed_table_regenerates_byte_for_byte() {

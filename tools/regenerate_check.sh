@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Every committed table regenerates byte for byte: each folder of results/ with a runs.csv is
-# copied, its tables made again by `noisefree table` (with --paper where its table3.md has the
-# paper's column) and compared with the committed files. Figures are left out (their pixels
-# follow the plotting crate's version); Markdown, CSV and folder indexes are compared.
+# Every committed table and figure regenerates byte for byte: each folder of results/ with a
+# runs.csv is copied, its tables made again by `noisefree table` (with --paper where its table3.md has the
+# paper's column) and compared with the committed files: Markdown, CSV, folder indexes and the
+# figures (PNG and SVG, drawn by the pinned plotting crate with the embedded font).
 # Usage: tools/regenerate_check.sh [NOISEFREE_BINARY] [FOLDER...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,18 +25,20 @@ for d in "${folders[@]}"; do
   if ! "$NF" table "${paper[@]}" "$copy" > "$tmp/out.txt" 2>&1; then
     echo "FAIL $d: noisefree table failed"; cat "$tmp/out.txt"; status=1; continue
   fi
-  for f in "$d"/*.md "$d"/*.csv; do
+  for f in "$d"/*.md "$d"/*.csv "$d"/figures/*.png "$d"/figures/*.svg; do
     [ -f "$f" ] || continue
     case "$(basename "$f")" in runs.csv|planned.csv|frames.csv) continue ;; esac
-    if ! cmp -s "$f" "$copy/$(basename "$f")"; then
+    rel=${f#"$d"/}
+    if ! cmp -s "$f" "$copy/$rel"; then
       # The first line of a tables.md names the folder as it was given.
-      if [ "$(basename "$f")" = tables.md ] && \
+      if [ "$rel" = tables.md ] && \
         diff <(tail -n +2 "$f") <(tail -n +2 "$copy/tables.md") > /dev/null; then
         continue
       fi
-      echo "DIFFERS $f"; diff "$f" "$copy/$(basename "$f")" | head -6; status=1
+      echo "DIFFERS $f"; status=1
+      case "$f" in *.md|*.csv) diff "$f" "$copy/$rel" | head -6 ;; esac
     fi
   done
 done
-[ "$status" = 0 ] && echo "regenerate: every committed table of ${#folders[@]} folders made again, byte for byte"
+[ "$status" = 0 ] && echo "regenerate: every committed table and figure of ${#folders[@]} folders made again, byte for byte"
 exit "$status"
