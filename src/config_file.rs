@@ -268,6 +268,24 @@ pub fn config_name(c: &Config) -> &'static str {
     }
 }
 
+/// The system run: the sensor's defaults, overlaid by the `--config` file, with the switches
+/// of the command line; refused when the result is not a valid configuration.
+pub fn system_config(
+    sensor: slam_core::SensorKind,
+    config_file: Option<&Path>,
+    switches: Switches,
+) -> Result<Config> {
+    let mut config = base_config(sensor);
+    if let Some(p) = config_file {
+        config = overlay_file(&config, p)?;
+    }
+    let config = apply_switches(config, switches);
+    config
+        .check()
+        .map_err(|e| anyhow::anyhow!("{e} (from the command line or --config)"))?;
+    Ok(config)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

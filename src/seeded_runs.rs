@@ -6,7 +6,6 @@
 //! extracted once when several runs share them) -> [`record`] (files and lines) ->
 //! [`summarise`] (several runs' mean and spread).
 
-use crate::config_file::{apply_switches, base_config, overlay_file, Switches};
 use crate::runner::{run_extracted, run_sequence, ExtractedSequence, RunOutcome};
 use crate::select::{open, LoadOptions, Source};
 use anyhow::{Context, Result};
@@ -147,24 +146,6 @@ pub fn load(
         reader,
         images,
     })
-}
-
-/// The system run: the sensor's defaults, overlaid by the `--config` file, with the switches
-/// of the command line; refused when the result is not a valid configuration.
-pub fn system_config(
-    sensor: slam_core::SensorKind,
-    config_file: Option<&Path>,
-    switches: Switches,
-) -> Result<Config> {
-    let mut config = base_config(sensor);
-    if let Some(p) = config_file {
-        config = overlay_file(&config, p)?;
-    }
-    let config = apply_switches(config, switches);
-    config
-        .check()
-        .map_err(|e| anyhow::anyhow!("{e} (from the command line or --config)"))?;
-    Ok(config)
 }
 
 /// Runs `seeds` (one thread each, `jobs` at once) on `loaded` under `config`, a progress bar

@@ -2,8 +2,8 @@
 //! with one help text, so `run`, `sweep`, `perturb` and `match` cannot drift apart on what
 //! `--frames` or `--mapping-lag` means.
 
+use crate::config_file::system_config;
 use crate::config_file::{vocabulary_asked, Switches};
-use crate::seeded_runs::system_config;
 use crate::select::{LoadOptions, Source};
 use crate::vocab_file::VocabularyChoice;
 use anyhow::Result;

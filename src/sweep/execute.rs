@@ -7,7 +7,7 @@
 //! once per frame and setting, shared by the runs), [`run_ours`] (in parallel, each run
 //! recorded as it ends). Values arrive typed ([`SweepRequest`]) and stay typed.
 
-use crate::config_file::{base_config, overlay_file};
+use crate::config_file::{system_config, Switches};
 use crate::external::system::SystemDef;
 use crate::runner::{remembering, ExtractedSequence, ImageFrames};
 use crate::select::{open, LoadOptions, Source};
@@ -24,6 +24,7 @@ use datasets::{Catalog, FrameReader, Sequence};
 use rayon::prelude::*;
 use slam_core::feature::OrbConfig;
 use slam_core::system::Config;
+use slam_core::SensorKind;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -98,7 +99,7 @@ pub struct Plan {
 /// Phase 1: every job of the sweep (sequences x configurations x grids x seeds, times the
 /// perturbation points), each synthetic job with its realization's seed, and every
 /// configuration checked against its valid ranges before anything runs.
-pub fn plan(req: &SweepRequest, catalog: &Catalog) -> Result<Plan> {
+pub fn plan(req: &SweepRequest, catalog: &Catalog, settings: &SweepSettings) -> Result<Plan> {
     let labels: Vec<String> = req.sources.iter().map(Source::label).collect();
     let points = perturbation_points(&req.axes, &req.with, req.perturb_seed);
     let mut jobs = with_perturbations(
@@ -128,11 +129,7 @@ pub fn plan(req: &SweepRequest, catalog: &Catalog) -> Result<Plan> {
             });
         }
     }
-    // A config file's values are checked where it is read; these are the flags'.
-    let mut flags = Config::default();
-    if let Some(n) = req.mapping_lag {
-        flags.mapping_lag = n;
-    }
+    // The base settings were checked when resolved; these are each column's own values.
     let mut seen: Vec<(crate::sweep::plan::ConfigKind, Params)> = Vec::new();
     for job in &jobs {
         let Some(kind) = job.config.kind() else {
@@ -142,7 +139,7 @@ pub fn plan(req: &SweepRequest, catalog: &Catalog) -> Result<Plan> {
             continue;
         }
         seen.push((kind, job.params));
-        job_config(&flags, job).check().map_err(|e| {
+        job_config(&settings.rgbd, job).check().map_err(|e| {
             anyhow::anyhow!("{e} (from --tau-mf, --tau-gf, --tau-mg, --baseline or --mapping-lag)")
         })?;
     }
@@ -153,56 +150,74 @@ pub fn plan(req: &SweepRequest, catalog: &Catalog) -> Result<Plan> {
     })
 }
 
+/// The settings every run of ours starts from, resolved once from `--config`, the flags and
+/// the vocabulary (as `run` resolves its own): one base configuration per sensor, which each
+/// column's kind, readings and parameters then change. The folder pins what it shares.
+pub struct SweepSettings {
+    /// The base configuration of RGB-D sequences.
+    pub rgbd: Config,
+    /// The base configuration of stereo sequences.
+    pub stereo: Config,
+    /// The place-recognition vocabulary.
+    pub vocabulary: VocabularyChoice,
+}
+
+impl SweepSettings {
+    /// Resolves the request's `--config`, `--mapping-lag`, `--no-loop-closing` and
+    /// `--vocabulary`.
+    pub fn resolve(req: &SweepRequest) -> Result<Self> {
+        let switches = Switches {
+            mapping_lag: req.mapping_lag,
+            no_loop_closing: req.no_loop_closing,
+            ..Switches::default()
+        };
+        let of = |sensor| system_config(sensor, req.config.as_deref(), switches);
+        let vocab_flag =
+            crate::config_file::vocabulary_asked(req.vocabulary.as_deref(), req.config.as_deref())?;
+        Ok(Self {
+            rgbd: of(SensorKind::Rgbd)?,
+            stereo: of(SensorKind::Stereo)?,
+            vocabulary: crate::vocab_file::choose(vocab_flag.as_deref())?,
+        })
+    }
+
+    /// The base configuration of a sequence of `sensor`.
+    pub fn base(&self, sensor: SensorKind) -> &Config {
+        match sensor {
+            SensorKind::Rgbd => &self.rgbd,
+            SensorKind::Stereo => &self.stereo,
+        }
+    }
+}
+
 /// The output folder ready for runs: its store (resumed), the vocabulary every run of ours
 /// uses, and the cache for sequences written for external systems.
 pub struct Folder {
     /// The record of finished runs.
     pub store: RunStore,
-    /// The place-recognition vocabulary.
-    pub vocabulary: VocabularyChoice,
     /// Cache of sequences on disk for external systems.
     pub cache: PathBuf,
+    /// The settings every run of ours starts from, and the vocabulary.
+    pub settings: SweepSettings,
 }
 
 /// Phase 2: opens the run store (dropping, with `--retry-failed`, this sweep's failed external
 /// runs), pins the settings every run of the folder shares (a resumed sweep must not mix
 /// settings) and the external systems' definitions.
-pub fn settle_folder(req: &SweepRequest, plan: &Plan) -> Result<Folder> {
+pub fn settle_folder(req: &SweepRequest, plan: &Plan, settings: SweepSettings) -> Result<Folder> {
     let keys: std::collections::BTreeSet<String> = plan.jobs.iter().map(Job::key).collect();
     let store = RunStore::open_dropping(&req.out, req.shard, |r| {
         req.retry_failed && r.reason.is_some() && keys.contains(&r.key())
     })?;
-    let file_config = req
-        .config
-        .as_ref()
-        .map(|p| overlay_file(&Config::default(), p))
-        .transpose()?;
-    let mapping_lag = match (req.mapping_lag, &file_config) {
-        (Some(n), _) => n,
-        (None, Some(c)) => c.mapping_lag,
-        (None, None) => 0,
-    };
-    let vocab_flag =
-        crate::config_file::vocabulary_asked(req.vocabulary.as_deref(), req.config.as_deref())?;
-    let vocabulary = crate::vocab_file::choose(vocab_flag.as_deref())?;
-    let loop_closing_on = match &file_config {
-        _ if req.no_loop_closing => false,
-        Some(c) => c.loop_closing.enabled,
-        None => true,
-    } && vocabulary.vocabulary.is_some();
-    let approximations = file_config
-        .as_ref()
-        .map(crate::config_file::approximations)
-        .unwrap_or_default();
-    let readings = file_config
-        .as_ref()
-        .map(crate::config_file::readings)
-        .unwrap_or_default();
+    // What every run shares, from the settings resolved once (the RGB-D base: what the pins
+    // read is the same for both sensors).
+    let base = &settings.rgbd;
+    let mapping_lag = base.mapping_lag;
+    let loop_closing_on = base.loop_closing.enabled && settings.vocabulary.vocabulary.is_some();
+    let approximations = crate::config_file::approximations(base);
+    let readings = crate::config_file::readings(base);
     // The reading of the `mcor` and `mcor+avc` columns: the config file's, else the default.
-    let mcor_cluster = file_config
-        .and_then(|c| c.mcor)
-        .unwrap_or_default()
-        .cluster_views;
+    let mcor_cluster = base.mcor.clone().unwrap_or_default().cluster_views;
     let mut synth_without = req.synth_without.clone();
     synth_without.sort();
     synth_without.dedup();
@@ -210,7 +225,7 @@ pub fn settle_folder(req: &SweepRequest, plan: &Plan) -> Result<Folder> {
         &req.out,
         &FolderSettings {
             mapping_lag,
-            vocabulary: vocabulary.identity.clone(),
+            vocabulary: settings.vocabulary.identity.clone(),
             loop_closing: loop_closing_on,
             mcor_cluster,
             approximations,
@@ -237,8 +252,8 @@ pub fn settle_folder(req: &SweepRequest, plan: &Plan) -> Result<Folder> {
     )?;
     Ok(Folder {
         store,
-        vocabulary,
         cache,
+        settings,
     })
 }
 
@@ -305,8 +320,9 @@ pub struct Summary {
 
 /// Runs the whole sweep (this shard's runs not yet recorded).
 pub fn sweep(req: &SweepRequest, catalog: &Catalog) -> Result<Summary> {
-    let plan = plan(req, catalog)?;
-    let folder = settle_folder(req, &plan)?;
+    let settings = SweepSettings::resolve(req)?;
+    let plan = plan(req, catalog, &settings)?;
+    let folder = settle_folder(req, &plan, settings)?;
     // The whole plan, every shard's runs included: the folder is complete when all are recorded.
     crate::sweep::planned::record_plan(&req.out, plan.jobs.iter().map(Job::key))?;
     let mine: Vec<&Job> = plan
@@ -467,16 +483,7 @@ pub fn prepare_realization<'a>(
     } else {
         frames
     };
-    let mut base = base_config(seq.camera.sensor);
-    if let Some(p) = &req.config {
-        base = overlay_file(&base, p)?;
-    }
-    if let Some(n) = req.mapping_lag {
-        base.mapping_lag = n;
-    }
-    if req.no_loop_closing {
-        base.loop_closing.enabled = false;
-    }
+    let base = cx.folder.settings.base(seq.camera.sensor).clone();
     let mut orbs: Vec<OrbConfig> = Vec::new();
     for job in jobs.iter().filter(|j| j.config.kind().is_some()) {
         let orb = job_config(&base, job).orb;
@@ -733,7 +740,7 @@ pub fn run_ours(
                     pseq,
                     extracted,
                     &rz.base,
-                    cx.folder.vocabulary.vocabulary.as_ref(),
+                    cx.folder.settings.vocabulary.vocabulary.as_ref(),
                     job,
                     &cx.req.out,
                 )?;
