@@ -7,9 +7,11 @@
 //! - [`association`]: the truth of each match (same point, mismatch, moving object);
 //! - [`outliers`]: Fig. 8 (inliers / outliers per frame with and without MC-OR) and Fig. 7 (one
 //!   frame with the features MC-OR rejected);
-//! - their drawings are the report's (`results::report::panels`).
+//! - [`report`]: their Markdown and Fig. 8, from what the others measured; the drawing
+//!   primitives are the results report's (`results::report::panels`).
 
 pub mod association;
 pub mod correlation;
 pub mod outliers;
+pub mod report;
 pub mod stream;
