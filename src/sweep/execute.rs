@@ -26,7 +26,7 @@ use slam_core::feature::OrbConfig;
 use slam_core::system::Config;
 use slam_core::SensorKind;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// A sweep as the command line asks for it, every value parsed and checked at the edge.
@@ -293,10 +293,20 @@ pub fn check_perturbations(
     Ok(())
 }
 
-/// What every phase after the folder's reads.
+/// What every phase after the folder's reads: values, not the request.
 pub struct Phase<'a> {
-    /// The request.
-    pub req: &'a SweepRequest,
+    /// The output folder.
+    pub out: &'a Path,
+    /// This invocation's shard of the runs, if any.
+    pub shard: Option<Shard>,
+    /// No progress bars or notes.
+    pub quiet: bool,
+    /// The synthetic seed of realizations that do not vary (without --vary-sequence).
+    pub synth_seed: u64,
+    /// Whether each run of a synthetic sequence has its own realization (--vary-sequence).
+    pub vary_sequence: bool,
+    /// The external systems the sweep declares.
+    pub systems: &'a BTreeMap<String, SystemDef>,
     /// The catalog of sequences.
     pub catalog: &'a Catalog,
     /// The ready folder.
@@ -356,7 +366,12 @@ pub fn sweep(req: &SweepRequest, catalog: &Catalog) -> Result<Summary> {
     let opts = load_options(req);
     check_perturbations(req, &plan, catalog, &opts)?;
     let cx = Phase {
-        req,
+        out: &req.out,
+        shard: req.shard,
+        quiet: req.quiet,
+        synth_seed: req.synth_seed,
+        vary_sequence: req.vary_sequence,
+        systems: &req.systems,
         catalog,
         folder: &folder,
         opts: &opts,
@@ -462,15 +477,14 @@ pub fn prepare_realization<'a>(
         .iter()
         .flat_map(|(_, js)| js.iter().copied())
         .collect();
-    let req = cx.req;
     let opts = LoadOptions {
-        synth_seed: synth_seed.unwrap_or(req.synth_seed),
+        synth_seed: synth_seed.unwrap_or(cx.synth_seed),
         ..cx.opts.clone()
     };
     let (seq, frames) = open(src, cx.catalog, &opts)?;
     if let (Some(gt), true) = (&seq.groundtruth, jobs.iter().any(|j| j.seed == 0)) {
         write_tum(
-            &req.out
+            &cx.out
                 .join("trajectories")
                 .join(label)
                 .join("groundtruth.txt"),
@@ -546,7 +560,7 @@ pub fn run_point(
         };
         run_external_jobs(
             &theirs,
-            &cx.req.systems,
+            cx.systems,
             ExternalContext {
                 source,
                 seq: &pseq,
@@ -554,7 +568,7 @@ pub fn run_point(
                 catalog: cx.catalog,
                 opts: &rz.opts,
                 cache: &cx.folder.cache,
-                out: &cx.req.out,
+                out: cx.out,
                 store: &cx.folder.store,
             },
             cx.pool,
@@ -592,8 +606,8 @@ fn point_done(cx: &Phase<'_>, what: &str) -> Result<()> {
         return Ok(());
     }
     crate::sweep::cost::append(
-        &cx.req.out,
-        cx.req.shard,
+        cx.out,
+        cx.shard,
         &crate::sweep::cost::CostRow {
             invocation: cx.progress.started_unix.clone(),
             point: what.to_string(),
@@ -691,7 +705,7 @@ pub fn extract(
             .with_context(|| format!("reading the frames of {what}"))?
     };
     fbar.finish_and_clear();
-    if !cx.req.quiet {
+    if !cx.quiet {
         let n: usize = extracted.iter().map(|e| e.frames.len()).sum();
         let bytes: usize = extracted.iter().map(ExtractedSequence::heap_bytes).sum();
         // The workers' own clocks: the frames' wall times summed would count, on a shared machine,
@@ -726,7 +740,7 @@ pub fn run_ours(
     jobs: &[&Job],
 ) -> Result<()> {
     let prefix = match rz.synth_seed {
-        Some(s) if cx.req.vary_sequence => format!("{what} s{s}"),
+        Some(s) if cx.vary_sequence => format!("{what} s{s}"),
         _ => what.to_string(),
     };
     let bar = cx.progress.bar(jobs.len(), prefix, "runs");
@@ -742,7 +756,7 @@ pub fn run_ours(
                     &rz.base,
                     cx.folder.settings.vocabulary.vocabulary.as_ref(),
                     job,
-                    &cx.req.out,
+                    cx.out,
                 )?;
                 cx.folder.store.append(&rec)?;
                 cx.progress.done(rec.frames);
