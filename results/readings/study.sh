@@ -57,3 +57,11 @@ fi
   --configs orb,mcor:verdict=consensus,avc:b_role=camera --runs 10 --first-seed 10 \
   --mapping-lag 3 --quiet --out results/readings/confirm-fresh
 "$NF" table --paper results/readings/confirm-fresh
+# 1c. What the five-row interim screening found lower on the two walking twins outside the
+#     paper's Table III (fr3_w_xyz, fr3_w_half: consensus, the paper's MC-OR mechanisms, AVC's
+#     b as the camera's baseline and its 3-dof gate, all of them with MC-OR+AVC), again on fresh
+#     draws (seeds 10..19), so no comparison reuses the draws that chose it.
+"$NF" sweep --seq twin_fr3_w_xyz,twin_fr3_w_half \
+  --configs orb,mcor:verdict=consensus,mcor:paper,avc:b_role=camera,avc:gate=3dof,mcor+avc:paper:gate=3dof:b_role=camera \
+  --runs 10 --first-seed 10 --mapping-lag 3 --quiet --out results/readings/confirm-fresh-walking
+"$NF" table --paper results/readings/confirm-fresh-walking

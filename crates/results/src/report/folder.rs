@@ -235,13 +235,15 @@ fn write_index(
     sequences.sort();
     sequences.dedup();
     let mut systems: Vec<&str> = records.iter().map(|r| r.config.as_str()).collect();
+    // Our kinds in their order, then readings and external systems by name; each once.
     systems.sort_by_key(|n| {
-        crate::columns::ConfigKind::parse(n).map_or(usize::MAX, |k| {
+        let kind = crate::columns::ConfigKind::parse(n).map_or(usize::MAX, |k| {
             crate::columns::ConfigKind::EVERY
                 .iter()
                 .position(|e| *e == k)
                 .unwrap_or(0)
-        })
+        });
+        (kind, *n)
     });
     systems.dedup();
     let mut md = format!("{INDEX_MARK}\n# {name}\n\n");
