@@ -545,24 +545,6 @@ mod tests {
     use crate::select::{load, open, LoadOptions, Source};
     use crate::vocab_file::choose;
     use datasets::Catalog;
-    use std::path::PathBuf;
-
-    /// The first `frames` frames of a preset at the command line's default seed, through the
-    /// frame cache the workspace's test processes share (`target/tmp/synth-frames`; cargo
-    /// names that folder to integration tests only): the kinect and stereo frames the
-    /// command-line suites and the regression suite read later.
-    fn options(frames: usize) -> LoadOptions {
-        LoadOptions {
-            data_dir: PathBuf::new(),
-            frames: Some(frames),
-            synth_seed: 0,
-            synth_without: Vec::new(),
-            camera: None,
-            frame_cache: Some(
-                concat!(env!("CARGO_MANIFEST_DIR"), "/target/tmp/synth-frames").into(),
-            ),
-        }
-    }
 
     /// A preset's first frames decoded, the sequence as a sweep opens it (without frames), and
     /// the features extracted with `orb` through a frame reader as a sweep extracts them.
@@ -573,8 +555,9 @@ mod tests {
     ) -> (Sequence, Sequence, ExtractedSequence) {
         let source = Source::Catalog(preset.into());
         let catalog = Catalog::embedded();
-        let seq = load(&source, &catalog, &options(frames)).expect("a preset");
-        let (opened, _) = open(&source, &catalog, &options(frames)).expect("a preset");
+        let seq = load(&source, &catalog, &LoadOptions::for_tests(frames)).expect("a preset");
+        let (opened, _) =
+            open(&source, &catalog, &LoadOptions::for_tests(frames)).expect("a preset");
         assert!(opened.frames.is_empty());
         let decoded = seq.frames.clone();
         let reader = FrameReader::new(frames, move |i| Ok(decoded[i].clone()));
@@ -593,8 +576,9 @@ mod tests {
         for preset in ["kinect", "stereo"] {
             let source = Source::Catalog(preset.into());
             let catalog = Catalog::embedded();
-            let seq = load(&source, &catalog, &options(3)).expect("a preset");
-            let (opened, reader) = open(&source, &catalog, &options(3)).expect("a preset");
+            let seq = load(&source, &catalog, &LoadOptions::for_tests(3)).expect("a preset");
+            let (opened, reader) =
+                open(&source, &catalog, &LoadOptions::for_tests(3)).expect("a preset");
             assert_eq!(reader.len(), 3);
             assert_eq!(opened.groundtruth, seq.groundtruth);
             assert_eq!(opened.camera, seq.camera);

@@ -61,6 +61,25 @@ pub struct LoadOptions {
     pub frame_cache: Option<PathBuf>,
 }
 
+#[cfg(test)]
+impl LoadOptions {
+    /// The first `frames` frames of a preset at the command line's default seed, through the
+    /// frame cache the workspace's test processes share (`target/tmp/synth-frames`; cargo
+    /// names that folder to integration tests only): what the unit tests that run presets load.
+    pub fn for_tests(frames: usize) -> Self {
+        LoadOptions {
+            data_dir: PathBuf::new(),
+            frames: Some(frames),
+            synth_seed: 0,
+            synth_without: Vec::new(),
+            camera: None,
+            frame_cache: Some(
+                concat!(env!("CARGO_MANIFEST_DIR"), "/target/tmp/synth-frames").into(),
+            ),
+        }
+    }
+}
+
 /// Loads (or generates) the sequence of `source`, every frame decoded (the runner's tests).
 #[cfg(test)]
 pub fn load(source: &Source, catalog: &Catalog, opts: &LoadOptions) -> Result<Sequence> {

@@ -76,20 +76,10 @@ mod tests {
     /// the samples it allows.
     #[test]
     fn virtual_cameras_sit_b_away_in_the_image_plane_towards_the_error() {
-        let opts = LoadOptions {
-            data_dir: Default::default(),
-            frames: Some(20),
-            synth_seed: 0,
-            synth_without: Vec::new(),
-            camera: None,
-            frame_cache: Some(
-                concat!(env!("CARGO_MANIFEST_DIR"), "/target/tmp/synth-frames").into(),
-            ),
-        };
         let seq = load(
             &Source::Catalog("walking".into()),
             &Catalog::embedded(),
-            &opts,
+            &LoadOptions::for_tests(20),
         )
         .expect("a preset");
         let avc = AvcParams::default();

@@ -119,20 +119,10 @@ mod tests {
     /// system did.
     #[test]
     fn every_keypoint_has_one_fate_and_the_kept_are_the_inliers() {
-        let opts = LoadOptions {
-            data_dir: Default::default(),
-            frames: Some(30),
-            synth_seed: 0,
-            synth_without: Vec::new(),
-            camera: None,
-            frame_cache: Some(
-                concat!(env!("CARGO_MANIFEST_DIR"), "/target/tmp/synth-frames").into(),
-            ),
-        };
         let seq = load(
             &Source::Catalog("walking".into()),
             &Catalog::embedded(),
-            &opts,
+            &LoadOptions::for_tests(30),
         )
         .expect("a preset");
         let config = Config {
